@@ -9,9 +9,39 @@ follows the robot during checks and is parked far below the ground otherwise); c
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import os
+import sys
+from collections.abc import Iterator
+
 import numpy as np
-import pybullet as p
-import pybullet_data
+
+_LIBC = ctypes.CDLL(None)
+
+
+@contextlib.contextmanager
+def _quiet_c_stdout() -> Iterator[None]:
+    """Silence the URDF importer's C-level warnings (the Husky URDF has links without inertia)."""
+    try:
+        sys.stdout.flush()
+        fd = os.dup(1)
+    except (OSError, ValueError):
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            yield
+            _LIBC.fflush(None)  # C stdio buffers: flush them while they still go to /dev/null
+    finally:
+        os.dup2(fd, 1)
+        os.close(fd)
+
+
+with _quiet_c_stdout():  # pybullet prints its build time on import
+    import pybullet as p
+import pybullet_data  # noqa: E402
 
 from .camera import camera_positions, linearize_depth_buffer, normalize_depth
 from .config import SimConfig
@@ -21,6 +51,8 @@ from .world import World
 _PARK = (0.0, 0.0, -100.0)
 
 
+
+
 class PyBulletSimulator(Simulator):
     """Simulator backed by a private PyBullet DIRECT client (closed by :meth:`close`)."""
 
@@ -28,7 +60,8 @@ class PyBulletSimulator(Simulator):
 
     def __init__(self, config: SimConfig | None = None) -> None:
         super().__init__(config)
-        self.client: int | None = p.connect(p.DIRECT)
+        with _quiet_c_stdout():  # connect prints the build time
+            self.client: int | None = p.connect(p.DIRECT)
         cam = self.config.camera
         self._proj = p.computeProjectionMatrixFOV(cam.fov_deg, 1.0, cam.near, cam.far)
         self._bodies: list[int] = []
@@ -44,8 +77,9 @@ class PyBulletSimulator(Simulator):
         cid = self._cid()
         p.resetSimulation(physicsClientId=cid)
         p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=cid)
-        p.loadURDF("plane.urdf", physicsClientId=cid)
-        self.husky = p.loadURDF("husky/husky.urdf", [0, 0, 0], physicsClientId=cid)
+        with _quiet_c_stdout():
+            p.loadURDF("plane.urdf", physicsClientId=cid)
+            self.husky = p.loadURDF("husky/husky.urdf", [0, 0, 0], physicsClientId=cid)
         wcfg = world.config
         height = wcfg.obstacle_height
         bodies = []

@@ -1,0 +1,92 @@
+"""Figures used by the chapters: top-down maps, depth images, the primitive library."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.patches import Circle, Rectangle
+
+from .primitives import PrimitiveLibrary
+from .world import World
+
+DEPTH_CMAP = "viridis"  # perceptually uniform, as in the paper's Figure 2
+
+
+def draw_world(world: World, ax: Axes | None = None, robot_pose: np.ndarray | None = None) -> Axes:
+    """Top-down map: walls, cylinders, the course's start and finish lines, the robot's disc."""
+    ax = ax or plt.gca()
+    cfg = world.config
+    half = world.wall_y
+    for side in (-1, 1):
+        y0 = half if side > 0 else -half - cfg.wall_thickness
+        ax.add_patch(Rectangle((-1, y0), cfg.length + 2, cfg.wall_thickness, color="0.5"))
+    for x, y, r in world.obstacles:
+        ax.add_patch(Circle((x, y), r, color="tab:orange"))
+    ax.axvline(0, color="0.7", ls=":", lw=1)
+    ax.axvline(cfg.length, color="tab:green", ls="--", lw=1)
+    pose = world.start if robot_pose is None else np.asarray(robot_pose)
+    draw_robot(pose, cfg.robot_radius, ax)
+    ax.set_xlim(-1, cfg.length + 1)
+    ax.set_ylim(-half - 0.5, half + 0.5)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m), along the course")
+    ax.set_ylabel("y (m)")
+    return ax
+
+
+def draw_robot(pose: np.ndarray, radius: float, ax: Axes, color: str = "tab:blue") -> None:
+    """The robot's collision disc and heading arrow."""
+    x, y, yaw = pose
+    ax.add_patch(Circle((x, y), radius, fill=False, ec=color, lw=1.5))
+    ax.arrow(x, y, 0.6 * np.cos(yaw), 0.6 * np.sin(yaw), head_width=0.15, color=color)
+
+
+def draw_path(path: np.ndarray, ax: Axes, color: str = "tab:blue", **kw: object) -> None:
+    """A played-back path ``(S, 3)`` (or several concatenated)."""
+    ax.plot(path[:, 0], path[:, 1], color=color, **kw)
+
+
+def show_depth(depth: np.ndarray, ax: Axes | None = None, title: str | None = None, colorbar: bool = False) -> Axes:
+    """A normalised depth image in viridis (0 = at the camera, 1 = nothing within ``far``)."""
+    ax = ax or plt.gca()
+    im = ax.imshow(depth, cmap=DEPTH_CMAP, vmin=0.0, vmax=1.0)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    if title:
+        ax.set_title(title, fontsize=9)
+    if colorbar:
+        plt.colorbar(im, ax=ax, fraction=0.046, label="normalised depth")
+    return ax
+
+
+def draw_library(library: PrimitiveLibrary, radius: float, ax: Axes | None = None) -> Axes:
+    """All primitives from the origin, with the robot's swept width for the two extremes."""
+    ax = ax or plt.gca()
+    colors = plt.cm.coolwarm(np.linspace(0, 1, library.n))
+    for k in range(library.n):
+        path = library.local_paths[k]
+        ax.plot(path[:, 0], path[:, 1], color=colors[k], lw=1.2)
+        ax.text(path[-1, 0] + 0.03, path[-1, 1], str(k), fontsize=6, va="center")
+    for k in (0, library.n - 1):
+        path = library.local_paths[k]
+        for sign in (-1, 1):
+            ax.plot(path[:, 0], path[:, 1] + sign * radius, color="0.6", lw=0.6, ls=":")
+    draw_robot(np.zeros(3), radius, ax)
+    ax.set_aspect("equal")
+    ax.set_xlabel("forward (m)")
+    ax.set_ylabel("left (m)")
+    return ax
+
+
+def figure_two(world: World, depth: np.ndarray, rgb: np.ndarray, pose: np.ndarray | None = None) -> plt.Figure:
+    """The paper's Figure 2, plus a map: RGB view, depth in viridis, top-down map."""
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), gridspec_kw={"width_ratios": [1, 1, 2.2]})
+    axes[0].imshow(rgb)
+    axes[0].set_axis_off()
+    axes[0].set_title("onboard RGB", fontsize=9)
+    show_depth(depth, axes[1], "onboard depth (viridis)", colorbar=True)
+    draw_world(world, axes[2], pose)
+    axes[2].set_title(f"world seed {world.seed}", fontsize=9)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,19 @@
+"""Shared fixtures: a small dataset built once per test session (quick profile, fast backend)."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+os.environ.setdefault("HUSKY_PROFILE", "quick")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+@pytest.fixture(scope="session")
+def small_dataset_dir(tmp_path_factory: pytest.TempPathFactory):
+    from husky_course.collect import collect
+
+    out = tmp_path_factory.mktemp("ds") / "data"
+    collect(out, "quick", videos=120, seed=3, workers=1, progress=False)
+    return out
