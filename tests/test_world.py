@@ -93,11 +93,15 @@ def test_depth_linearisation():
 
 
 def test_collision_against_walls_and_obstacles():
+    from husky_course.world import World
+
     sim = FastSimulator()
     world = sim.load(0)
+    sim.load(World(0, world.config, np.zeros((0, 3)), np.zeros(3)))  # walls only
     y = world.wall_y - world.config.robot_radius
     assert sim.contact_along(np.array([[5.0, y - 1e-3, 0.0]])) == -1
     assert sim.contact_along(np.array([[5.0, y + 1e-3, 0.0]])) == 0
+    sim.load(world)
     x, oy, r = world.obstacles[0]
     gap = r + world.config.robot_radius
     assert sim.contact_along(np.array([[x, oy + gap - 1e-3, 0.0]])) == 0
