@@ -1,0 +1,40 @@
+# The course's two commands: `make book` and `make test`. Everything else is a helper.
+SHELL := /bin/bash
+.SHELLFLAGS := -eu -o pipefail -c
+VENV ?= .venv
+PY := $(VENV)/bin/python
+PROFILE ?= full
+export MPLBACKEND := Agg
+
+.PHONY: book test install data lint bench clean
+
+$(VENV)/.installed: requirements.txt pyproject.toml
+	test -x $(PY) || python3 -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
+	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
+	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval"  # fail loudly if incomplete
+	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
+	touch $@
+
+install: $(VENV)/.installed
+
+data: install  ## build the datasets the chapters need, once, with progress bars
+	HUSKY_PROFILE=$(PROFILE) $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
+
+book: data  ## execute every chapter (full profile by default) and build the HTML book
+	HUSKY_PROFILE=$(PROFILE) $(VENV)/bin/jupyter-book build . -W -n --keep-going
+	@echo "The book is at $(CURDIR)/_build/html/index.html"
+
+lint: install
+	$(VENV)/bin/ruff check husky_course tests benchmarks
+
+test: install lint  ## unit tests + every notebook under nbval, quick profile
+	HUSKY_PROFILE=quick $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
+	HUSKY_PROFILE=quick $(PY) -m pytest tests notebooks --nbval-lax -p no:cacheprovider
+
+bench: install  ## speed of the fast backend vs PyBullet, side by side
+	$(PY) benchmarks/bench_collection.py
+
+clean:
+	rm -rf _build

@@ -1,0 +1,142 @@
+import json
+
+import numpy as np
+import pytest
+
+from husky_course import collect as collect_mod
+from husky_course.cli import main as cli_main
+from husky_course.collect import collect
+from husky_course.config import ConfigError
+from husky_course.dataset import (
+    DatasetError,
+    encoder_decoder_pairs,
+    load_dataset,
+    pair_indices,
+    reward_set,
+    stats,
+)
+
+NAMES = ("images", "prims", "labels", "applied", "episode", "step", "poses", "world_seeds", "lengths", "collided")
+
+
+def _arrays(path):
+    ds = load_dataset(path)
+    return {n: np.asarray(getattr(ds, n)) for n in NAMES}
+
+
+def test_minus_one_convention_and_episode_boundaries(small_dataset_dir):
+    ds = load_dataset(small_dataset_dir)
+    assert ds.images.shape[1:] == (50, 50) and ds.images.dtype == np.float16
+    assert 0 <= ds.images.min() and ds.images.max() <= 1
+    # -1 exactly where the label is 1, and the real primitive is kept in `applied`
+    np.testing.assert_array_equal(ds.prims == -1, ds.labels == 1)
+    safe = ds.labels == 0
+    np.testing.assert_array_equal(ds.prims[safe], ds.applied[safe])
+    assert ds.applied.min() >= 0 and ds.applied.max() < 25
+    for v in range(len(ds.lengths)):
+        idx = ds.video(v)
+        assert len(idx) == ds.lengths[v] and np.all(np.diff(idx) == 1)
+        np.testing.assert_array_equal(ds.step[idx], np.arange(len(idx)))
+        # at most one unsafe step, and it is the video's last
+        assert ds.labels[idx[:-1]].sum() == 0
+        assert ds.labels[idx[-1]] == ds.collided[v]
+        if not ds.collided[v]:
+            assert len(idx) == 10
+    s = stats(ds)
+    assert s["videos"] == 120 and s["images"] == len(ds) == ds.lengths.sum()
+    assert s["unsafe"] == s["videos_ending_in_collision"]
+
+
+def test_pairs_never_cross_videos_or_collisions(small_dataset_dir):
+    ds = load_dataset(small_dataset_dir)
+    t = pair_indices(ds)
+    assert np.all(ds.labels[t] == 0) and np.all(ds.episode[t] == ds.episode[t + 1])
+    # every safe image except the last of a surviving video has a successor
+    survivors_last = np.cumsum(ds.lengths)[ds.collided == 0] - 1
+    assert len(t) == (ds.labels == 0).sum() - len(survivors_last)
+    split = encoder_decoder_pairs(ds, seed=1)
+    assert len(np.intersect1d(split.train_t, split.val_t)) == 0
+    assert len(split.val_t) == round(0.2 * len(t))
+    again = encoder_decoder_pairs(ds, seed=1)
+    np.testing.assert_array_equal(split.train_t, again.train_t)
+    rs = reward_set(ds, seed=1)
+    members = np.concatenate([rs.train, rs.val])
+    assert ds.labels[members].sum() == ds.labels.sum()  # every unsafe image is in
+    n_safe = (ds.labels[members] == 0).sum()
+    assert n_safe == round(0.5 * (ds.labels == 0).sum())
+
+
+def test_same_seed_same_bytes_for_any_worker_count(tmp_path):
+    a = collect(tmp_path / "a", "quick", videos=60, seed=4, workers=1, progress=False)
+    b = collect(tmp_path / "b", "quick", videos=60, seed=4, workers=2, progress=False)
+    for name in NAMES:
+        assert (a / f"{name}.npy").read_bytes() == (b / f"{name}.npy").read_bytes(), name
+    c = collect(tmp_path / "c", "quick", videos=60, seed=5, progress=False)
+    assert (a / "images.npy").read_bytes() != (c / "images.npy").read_bytes()
+
+
+def test_interrupted_run_resumes_to_identical_result(tmp_path, monkeypatch):
+    from dataclasses import replace
+
+    from husky_course.config import get_profile
+
+    prof = get_profile("quick")
+    prof = replace(prof, data=replace(prof.data, shard_videos=10))
+    ref = collect(tmp_path / "ref", prof, videos=50, seed=2, progress=False)
+    real_job, done = collect_mod._shard_job, []
+
+    def crashing_job(job):
+        if len(done) == 3:
+            raise KeyboardInterrupt("killed")
+        done.append(real_job(job))
+        return done[-1]
+
+    monkeypatch.setattr(collect_mod, "_shard_job", crashing_job)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        collect(out, prof, videos=50, seed=2, progress=False)
+    assert not (out / "meta.json").exists()
+    shards = sorted((out / "shards").glob("shard_*.npz"))
+    assert len(shards) == 3
+    (out / "shards" / ".shard_00003.npz.999.tmp").write_bytes(b"half a shard")  # a killed write
+    with pytest.raises(DatasetError, match="no meta.json"):
+        load_dataset(out)  # a reader never mistakes an unfinished run for a dataset
+    monkeypatch.setattr(collect_mod, "_shard_job", real_job)
+    collect(out, prof, videos=50, seed=2, progress=False)
+    for name in NAMES:
+        assert (ref / f"{name}.npy").read_bytes() == (out / f"{name}.npy").read_bytes(), name
+
+
+def test_bad_inputs_are_clear_and_lose_nothing(tmp_path, small_dataset_dir, capsys):
+    with pytest.raises(ConfigError, match="unknown profile"):
+        collect(tmp_path / "x", "huge")
+    with pytest.raises(ValueError, match="positive integer"):
+        collect(tmp_path / "x", "quick", videos=-5)
+    with pytest.raises(ConfigError, match="unknown backend"):
+        collect(tmp_path / "x", "quick", videos=5, backend="unity")
+    with pytest.raises(ValueError, match="workers"):
+        collect(tmp_path / "x", "quick", videos=5, workers=0)
+    with pytest.raises(ValueError, match="collection seed"):
+        collect(tmp_path / "x", "quick", videos=5, seed=10**6)
+    # a directory holding a dataset made with another config is refused, and left untouched
+    out = collect(tmp_path / "d", "quick", videos=8, progress=False)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    with pytest.raises(DatasetError, match="different config"):
+        collect(out, "quick", videos=9, progress=False)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # truncated and corrupted arrays
+    trunc = out / "labels.npy"
+    trunc.write_bytes(trunc.read_bytes()[:-3])
+    with pytest.raises(DatasetError, match="labels.npy"):
+        load_dataset(out)
+    with pytest.raises(DatasetError, match="truncated or corrupted"):
+        load_dataset(out, verify=False)
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["videos"] == 8 and meta["backend"] == "fast" and "package_version" in meta
+    # the CLI turns these into one-line errors with exit code 2
+    assert cli_main(["stats", str(out)]) == 2
+    assert "labels.npy" in capsys.readouterr().err
+    assert cli_main(["collect", "--profile", "nope", "--out", str(tmp_path / "y")]) == 2
+    assert cli_main(["stats", str(small_dataset_dir), "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["videos"] == 120
