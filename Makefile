@@ -27,7 +27,7 @@ book: data  ## execute every chapter (full profile by default) and build the HTM
 	@echo "The book is at $(CURDIR)/_build/html/index.html"
 
 lint: install
-	$(VENV)/bin/ruff check husky_course tests benchmarks
+	$(VENV)/bin/ruff check husky_course tests benchmarks tools
 
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	HUSKY_PROFILE=quick $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"

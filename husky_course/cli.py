@@ -23,7 +23,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m husky_course", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     c = sub.add_parser("collect", help="collect a random-policy dataset (resumable)")
-    c.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE or quick)")
+    c.add_argument(
+        "--profile",
+        default=None,
+        help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE or quick)",
+    )
     c.add_argument("--videos", type=int, default=None, help="number of videos (default: the profile's)")
     c.add_argument("--seed", type=int, default=None, help="collection seed (default: the profile's)")
     c.add_argument("--workers", type=int, default=1, help="worker processes (result is the same for any)")
@@ -42,8 +46,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "collect":
             out = collect(
-                args.out, args.profile, videos=args.videos, seed=args.seed, workers=args.workers,
-                backend=args.backend, progress=not args.no_progress,
+                args.out,
+                args.profile,
+                videos=args.videos,
+                seed=args.seed,
+                workers=args.workers,
+                backend=args.backend,
+                progress=not args.no_progress,
             )
             print(json.dumps(stats(load_dataset(out)), indent=1))
         elif args.command == "stats":

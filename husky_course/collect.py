@@ -142,7 +142,9 @@ def collect(
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
     world_seed_for(seed, videos - 1)  # validates seed and video count
-    profile = replace(profile, data=replace(profile.data, videos=int(videos), seed=int(seed), backend=backend))
+    profile = replace(
+        profile, data=replace(profile.data, videos=int(videos), seed=int(seed), backend=backend)
+    )
     out = Path(out)
     spec = collection_spec(profile, int(videos), int(seed), backend)
     spec_text = json.dumps(spec, indent=1, sort_keys=True)
@@ -172,8 +174,13 @@ def collect(
             continue
         jobs.append((str(path), profile, backend, seed, start, min(start + size, videos), shard_id))
     n_shards = -(-videos // size)
-    bar = tqdm(total=n_shards, initial=n_shards - len(jobs), desc=f"collect ({backend})",
-               unit="shard", disable=not progress)
+    bar = tqdm(
+        total=n_shards,
+        initial=n_shards - len(jobs),
+        desc=f"collect ({backend})",
+        unit="shard",
+        disable=not progress,
+    )
     if workers == 1 or len(jobs) <= 1:
         for job in jobs:
             _shard_job(job)

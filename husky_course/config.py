@@ -71,7 +71,9 @@ class CameraConfig:
     fov_deg: float = 130.0  #: the lab's value; chapter 1 shows why 90 is too narrow
     near: float = 0.02
     far: float = 5.0
-    mount_forward: float = 0.45  #: ahead of the base centre, on the collision cylinder, just behind the bumper (m)
+    mount_forward: float = (
+        0.45  #: ahead of the base centre, on the collision cylinder, just behind the bumper (m)
+    )
     mount_height: float = 0.40  #: above the ground (m)
 
 

@@ -84,7 +84,9 @@ class HuskyNavEnv(gym.Env):
         if self.done:
             raise RuntimeError("episode is over: call reset() before step()")
         if not self.action_space.contains(action):
-            raise ValueError(f"invalid action {action!r}: expected an integer in 0..{self.action_space.n - 1}")
+            raise ValueError(
+                f"invalid action {action!r}: expected an integer in 0..{self.action_space.n - 1}"
+            )
         result = self.sim.apply(self.pose, int(action))
         self.pose = result.pose
         self.path.append(result.path)

@@ -45,7 +45,7 @@ def hit_visibility(
     base = FastSimulator(config)
     seen = dict.fromkeys(fovs, 0)
     total = 0
-    for seed, pose in zip(np.asarray(world_seeds), np.asarray(poses, float)):
+    for seed, pose in zip(np.asarray(world_seeds), np.asarray(poses, float), strict=True):
         world = base.load(int(seed))
         bodies = [_first_hit_body(base, base.library.path_from(pose, k)) for k in range(base.library.n)]
         hits = {b for b in bodies if b >= 2}

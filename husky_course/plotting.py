@@ -47,7 +47,9 @@ def draw_path(path: np.ndarray, ax: Axes, color: str = "tab:blue", **kw: object)
     ax.plot(path[:, 0], path[:, 1], color=color, **kw)
 
 
-def show_depth(depth: np.ndarray, ax: Axes | None = None, title: str | None = None, colorbar: bool = False) -> Axes:
+def show_depth(
+    depth: np.ndarray, ax: Axes | None = None, title: str | None = None, colorbar: bool = False
+) -> Axes:
     """A normalised depth image in viridis (0 = at the camera, 1 = nothing within ``far``)."""
     ax = ax or plt.gca()
     im = ax.imshow(depth, cmap=DEPTH_CMAP, vmin=0.0, vmax=1.0)
@@ -79,7 +81,9 @@ def draw_library(library: PrimitiveLibrary, radius: float, ax: Axes | None = Non
     return ax
 
 
-def figure_two(world: World, depth: np.ndarray, rgb: np.ndarray, pose: np.ndarray | None = None) -> plt.Figure:
+def figure_two(
+    world: World, depth: np.ndarray, rgb: np.ndarray, pose: np.ndarray | None = None
+) -> plt.Figure:
     """The paper's Figure 2, plus a map: RGB view, depth in viridis, top-down map."""
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), gridspec_kw={"width_ratios": [1, 1, 2.2]})
     axes[0].imshow(rgb)

@@ -43,14 +43,12 @@ with _quiet_c_stdout():  # pybullet prints its build time on import
     import pybullet as p
 import pybullet_data  # noqa: E402
 
-from .camera import camera_positions, linearize_depth_buffer, normalize_depth
-from .config import SimConfig
-from .sim import Simulator
-from .world import World
+from .camera import camera_positions, linearize_depth_buffer, normalize_depth  # noqa: E402
+from .config import SimConfig  # noqa: E402
+from .sim import Simulator  # noqa: E402
+from .world import World  # noqa: E402
 
 _PARK = (0.0, 0.0, -100.0)
-
-
 
 
 class PyBulletSimulator(Simulator):
@@ -91,13 +89,14 @@ class PyBulletSimulator(Simulator):
                 p.GEOM_BOX, halfExtents=half, rgbaColor=[0.6, 0.6, 0.65, 1], physicsClientId=cid
             )
             y = side * (world.wall_y + wcfg.wall_thickness / 2)
-            bodies.append(
-                p.createMultiBody(0, col, vis, [(x0 + x1) / 2, y, height / 2], physicsClientId=cid)
-            )
+            bodies.append(p.createMultiBody(0, col, vis, [(x0 + x1) / 2, y, height / 2], physicsClientId=cid))
         for x, y, r in world.obstacles:
             col = p.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=height, physicsClientId=cid)
             vis = p.createVisualShape(
-                p.GEOM_CYLINDER, radius=r, length=height, rgbaColor=[0.85, 0.45, 0.2, 1],
+                p.GEOM_CYLINDER,
+                radius=r,
+                length=height,
+                rgbaColor=[0.85, 0.45, 0.2, 1],
                 physicsClientId=cid,
             )
             bodies.append(p.createMultiBody(0, col, vis, [x, y, height / 2], physicsClientId=cid))
@@ -124,7 +123,12 @@ class PyBulletSimulator(Simulator):
         view = p.computeViewMatrix(eye.tolist(), (eye + fwd).tolist(), [0, 0, 1])
         size = self.config.camera.size
         _, _, rgb, depth, _ = p.getCameraImage(
-            size, size, view, self._proj, renderer=p.ER_TINY_RENDERER, flags=renderer_flags,
+            size,
+            size,
+            view,
+            self._proj,
+            renderer=p.ER_TINY_RENDERER,
+            flags=renderer_flags,
             physicsClientId=cid,
         )
         rgb = np.asarray(rgb, np.uint8).reshape(size, size, 4)[..., :3]
@@ -152,12 +156,12 @@ class PyBulletSimulator(Simulator):
         lo, hi = path[:, :2].min(0) - reach, path[:, :2].max(0) + reach
         obs = world.obstacles
         near = (
-            (obs[:, 0] + obs[:, 2] >= lo[0]) & (obs[:, 0] - obs[:, 2] <= hi[0])
-            & (obs[:, 1] + obs[:, 2] >= lo[1]) & (obs[:, 1] - obs[:, 2] <= hi[1])
+            (obs[:, 0] + obs[:, 2] >= lo[0])
+            & (obs[:, 0] - obs[:, 2] <= hi[0])
+            & (obs[:, 1] + obs[:, 2] >= lo[1])
+            & (obs[:, 1] - obs[:, 2] <= hi[1])
         )
-        candidates = [self._bodies[0], self._bodies[1]] + [
-            self._bodies[2 + i] for i in np.flatnonzero(near)
-        ]
+        candidates = [self._bodies[0], self._bodies[1]] + [self._bodies[2 + i] for i in np.flatnonzero(near)]
         hit = -1
         for k, (x, y, _) in enumerate(path):
             p.resetBasePositionAndOrientation(self.proxy, [x, y, 0.25], [0, 0, 0, 1], physicsClientId=cid)

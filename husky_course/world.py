@@ -50,7 +50,8 @@ def make_world(seed: int, cfg: WorldConfig | None = None) -> World:
     """Generate the world for ``seed``.
 
     The start ``y`` is drawn first; then each obstacle's ``(x, y, r)`` is drawn uniformly and
-    redrawn while it would touch the robot's start disc (plus ``start_clearance``). Everything comes from one ``numpy.random.Generator`` seeded with ``seed``.
+    redrawn while it would touch the robot's start disc (plus ``start_clearance``).
+    Everything comes from one ``numpy.random.Generator`` seeded with ``seed``.
     """
     cfg = cfg or WorldConfig()
     seed = check_seed(seed)

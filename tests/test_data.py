@@ -16,7 +16,18 @@ from husky_course.dataset import (
     stats,
 )
 
-NAMES = ("images", "prims", "labels", "applied", "episode", "step", "poses", "world_seeds", "lengths", "collided")
+NAMES = (
+    "images",
+    "prims",
+    "labels",
+    "applied",
+    "episode",
+    "step",
+    "poses",
+    "world_seeds",
+    "lengths",
+    "collided",
+)
 
 
 def _arrays(path):

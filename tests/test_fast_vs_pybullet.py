@@ -43,8 +43,10 @@ def test_depth_agrees_with_pybullet(sims):
         err_t = np.abs(a[None] - shifted).min(0)
         tolerant += list(np.percentile(err_t.reshape(len(a), -1), 99, axis=1))
     strict, tolerant = np.array(strict), np.array(tolerant)
-    print(f"views {len(strict)}: strict p99<=0.02 in {np.mean(strict <= 0.02):.1%}, "
-          f"tolerant in {np.mean(tolerant <= 0.02):.1%}; median strict p99 {np.median(strict):.4f}")
+    print(
+        f"views {len(strict)}: strict p99<=0.02 in {np.mean(strict <= 0.02):.1%}, "
+        f"tolerant in {np.mean(tolerant <= 0.02):.1%}; median strict p99 {np.median(strict):.4f}"
+    )
     assert len(strict) >= 200
     # Measured here: 90% of views meet p99 <= 0.02 pixel for pixel, 98% when a silhouette may
     # move by one column. The rest differ by one whole column (an obstacle edge or a one-pixel
