@@ -357,17 +357,14 @@ print("99th percentile of |fast - PyBullet| per image:", ", ".join(f"{e:.4f}" fo
 
 
 def keep_checked_outputs(nb) -> None:
-    """Drop every output except those of ``# NBVAL_CHECK_OUTPUT`` cells (which nbval compares)."""
+    """Drop every output except those of ``# NBVAL_CHECK_OUTPUT`` cells (which nbval compares).
+
+    Checked cells keep their execution count: nbval treats a cell without one as never run.
+    """
     for cell in nb.cells:
-        if cell.cell_type != "code":
-            continue
-        cell.execution_count = None
-        if "NBVAL_CHECK_OUTPUT" not in cell.source:
+        if cell.cell_type == "code" and "NBVAL_CHECK_OUTPUT" not in cell.source:
             cell.outputs = []
-        else:
-            for out in cell.outputs:
-                if "execution_count" in out:
-                    out["execution_count"] = None
+            cell.execution_count = None
 
 
 def main() -> None:
