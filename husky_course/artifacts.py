@@ -1,4 +1,4 @@
-"""The one artifact resolver: datasets (and, later, checkpoints) under ``artifacts/<profile>/``.
+"""The one artifact resolver: datasets and checkpoints under ``artifacts/<profile>/``.
 
 Each artifact's directory name carries a hash of the config that made it, so a changed config
 builds a new artifact instead of silently reusing a stale one. Nothing is ever downloaded: a
@@ -46,3 +46,15 @@ def get_dataset(
     if not (path / "meta.json").is_file():
         collect(path, profile, workers=workers or min(2, os.cpu_count() or 1), progress=progress)
     return load_dataset(path)
+
+
+def model_dir(name: str, fingerprint: dict, profile: Profile | str | None = None) -> Path:
+    """Checkpoint directory of model ``name`` trained under ``fingerprint`` (may not exist yet)."""
+    profile = profile if isinstance(profile, Profile) else get_profile(profile)
+    return artifacts_root() / profile.name / "models" / f"{name}-{config_hash(fingerprint)}"
+
+
+def runs_dir(name: str, fingerprint: dict, profile: Profile | str | None = None) -> Path:
+    """TensorBoard log directory of a training run: ``runs/<profile>/<name>-<hash>`` beside ``artifacts/``."""
+    profile = profile if isinstance(profile, Profile) else get_profile(profile)
+    return artifacts_root().parent / "runs" / profile.name / f"{name}-{config_hash(fingerprint)}"

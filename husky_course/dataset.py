@@ -198,12 +198,26 @@ class LabelSplit:
     val: np.ndarray
 
 
-def _split(idx: np.ndarray, rng: np.random.Generator, val_fraction: float) -> tuple[np.ndarray, np.ndarray]:
+def val_videos(ds: Dataset, seed: int = 0, val_fraction: float = 0.2) -> np.ndarray:
+    """Boolean mask over videos: which ones form the validation set (seeded, by whole video).
+
+    The paper samples 80 % of the *data* for training. We sample 80 % of the *videos*: two
+    consecutive frames of one video are nearly the same picture, and a validation image whose
+    neighbour was trained on would measure memory, not generalisation. Every pipeline uses this
+    one split, so all models are compared on the same validation worlds.
+    """
     if not 0.0 < val_fraction < 1.0:
         raise ValueError(f"val_fraction must be in (0, 1), got {val_fraction}")
-    perm = rng.permutation(idx)
-    n_val = int(round(val_fraction * len(perm)))
-    return np.sort(perm[n_val:]), np.sort(perm[:n_val])
+    n = int(ds.lengths.shape[0])
+    perm = np.random.default_rng([seed, 7]).permutation(n)
+    mask = np.zeros(n, bool)
+    mask[perm[: int(round(val_fraction * n))]] = True
+    return mask
+
+
+def _split(idx: np.ndarray, ds: Dataset, seed: int, val_fraction: float) -> tuple[np.ndarray, np.ndarray]:
+    in_val = val_videos(ds, seed, val_fraction)[ds.episode[idx]]
+    return np.sort(idx[~in_val]), np.sort(idx[in_val])
 
 
 def pair_indices(ds: Dataset) -> np.ndarray:
@@ -219,19 +233,22 @@ def pair_indices(ds: Dataset) -> np.ndarray:
 
 
 def encoder_decoder_pairs(ds: Dataset, seed: int = 0, val_fraction: float = 0.2) -> PairSplit:
-    """The first pipeline's data: collision-free ``(t, t+1)`` pairs, split 80/20 (seeded)."""
+    """The first pipeline's data: collision-free ``(t, t+1)`` pairs, split 80/20 by video (seeded)."""
     t = pair_indices(ds)
-    tr, va = _split(t, np.random.default_rng(seed), val_fraction)
+    tr, va = _split(t, ds, seed, val_fraction)
     return PairSplit(tr, tr + 1, va, va + 1)
 
 
 def reward_set(
     ds: Dataset, seed: int = 0, safe_fraction: float = 0.5, val_fraction: float = 0.2
 ) -> LabelSplit:
-    """The second pipeline's data: every unsafe image plus ``safe_fraction`` of the safe ones."""
+    """The second pipeline's data: every unsafe image plus ``safe_fraction`` of the safe ones.
+
+    Split 80/20 by video with :func:`val_videos`, like every other pipeline.
+    """
     rng = np.random.default_rng(seed)
     unsafe = np.flatnonzero(ds.labels == 1)
     safe = np.flatnonzero(ds.labels == 0)
     keep = rng.choice(safe, size=int(round(safe_fraction * len(safe))), replace=False)
-    tr, va = _split(np.concatenate([unsafe, keep]), rng, val_fraction)
+    tr, va = _split(np.concatenate([unsafe, keep]), ds, seed, val_fraction)
     return LabelSplit(tr, va)

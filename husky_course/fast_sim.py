@@ -162,13 +162,23 @@ class FastSimulator(Simulator):
         return int(idx[0]) if idx.size else -1
 
     def contacts(self, paths: np.ndarray) -> np.ndarray:
-        """Per-pose contact flags ``(B, S)`` for a batch of paths ``(B, S, 3)``."""
+        """Per-pose contact flags ``(B, S)`` for a batch of paths ``(B, S, 3)``.
+
+        A broad phase keeps only the (path, obstacle) pairs whose bounding circles overlap, so
+        the exact per-sample test runs on a few obstacles per path instead of all of them.
+        """
         world = self._require_world()
         radius = world.config.robot_radius
         paths = np.asarray(paths, float)
         xy = paths[..., :2]
         hit = np.abs(xy[..., 1]) + radius > world.wall_y
-        if self._obs.shape[0]:
-            d2 = ((xy[..., None, :] - self._obs[:, :2]) ** 2).sum(-1)
-            hit |= (d2 < (radius + self._obs[:, 2]) ** 2).any(-1)
+        if self._obs.shape[0] and paths.shape[1]:
+            lo, hi = xy.min(1), xy.max(1)  # (B, 2) bounding box of every path
+            centre, half = (lo + hi) / 2.0, np.linalg.norm(hi - lo, axis=1) / 2.0
+            gap = np.linalg.norm(centre[:, None, :] - self._obs[None, :, :2], axis=-1)
+            pb, po = np.nonzero(gap < half[:, None] + radius + self._obs[None, :, 2])
+            if pb.size:
+                d2 = ((xy[pb] - self._obs[po, None, :2]) ** 2).sum(-1)  # (pairs, S)
+                touch = d2 < (radius + self._obs[po, 2, None]) ** 2
+                np.logical_or.at(hit, pb, touch)
         return hit

@@ -67,7 +67,9 @@ def test_pairs_never_cross_videos_or_collisions(small_dataset_dir):
     assert len(t) == (ds.labels == 0).sum() - len(survivors_last)
     split = encoder_decoder_pairs(ds, seed=1)
     assert len(np.intersect1d(split.train_t, split.val_t)) == 0
-    assert len(split.val_t) == round(0.2 * len(t))
+    assert len(np.intersect1d(ds.episode[split.train_t], ds.episode[split.val_t])) == 0  # by video
+    assert 0.1 < len(split.val_t) / len(t) < 0.3
+    assert len(split.train_t) + len(split.val_t) == len(t)
     again = encoder_decoder_pairs(ds, seed=1)
     np.testing.assert_array_equal(split.train_t, again.train_t)
     rs = reward_set(ds, seed=1)
@@ -75,6 +77,7 @@ def test_pairs_never_cross_videos_or_collisions(small_dataset_dir):
     assert ds.labels[members].sum() == ds.labels.sum()  # every unsafe image is in
     n_safe = (ds.labels[members] == 0).sum()
     assert n_safe == round(0.5 * (ds.labels == 0).sum())
+    assert len(np.intersect1d(ds.episode[rs.train], ds.episode[rs.val])) == 0
 
 
 def test_same_seed_same_bytes_for_any_worker_count(tmp_path):
