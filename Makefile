@@ -4,7 +4,7 @@ SHELL := /bin/bash
 VENV ?= .venv
 PY := $(VENV)/bin/python
 PROFILE ?= full
-export MPLBACKEND := Agg
+unexport MPLBACKEND  # kernels must use the inline backend, or notebooks lose their figures
 
 .PHONY: book test install data lint bench clean
 

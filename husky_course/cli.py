@@ -1,9 +1,10 @@
-"""Command line: ``python -m husky_course {collect,stats} ...``.
+"""Command line: ``python -m husky_course {collect,stats,evaluate} ...``.
 
 Examples
 --------
 ``python -m husky_course collect --profile full --out artifacts/full/my-dataset --workers 2``
 ``python -m husky_course stats artifacts/full/my-dataset --json``
+``python -m husky_course evaluate --planner heuristic --worlds 500 --seed 0 --json``
 """
 
 from __future__ import annotations
@@ -12,10 +13,12 @@ import argparse
 import json
 import sys
 
-from .backends import BACKENDS
+from .backends import BACKENDS, check_backend, make_simulator
 from .collect import collect
-from .config import PROFILES, ConfigError
+from .config import PROFILES, ConfigError, get_profile
 from .dataset import DatasetError, load_dataset, stats
+from .evaluation import eval_world_seeds, evaluate
+from .planning import LEARNED_PLANNERS, PLANNERS, PlannerError, check_look_ahead, make_planner
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -37,7 +40,43 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("stats", help="summarise a dataset")
     s.add_argument("dir", help="dataset directory")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    e = sub.add_parser("evaluate", help="evaluate a planner on held-out evaluation worlds")
+    e.add_argument("--planner", required=True, help=f"one of {', '.join(PLANNERS)}")
+    e.add_argument("--worlds", type=int, default=100, help="number of evaluation worlds (default 100)")
+    e.add_argument("--seed", type=int, default=0, help="evaluation set (default 0)")
+    e.add_argument(
+        "--look-ahead",
+        type=int,
+        default=None,
+        help=f"look-ahead K of the learned planners ({', '.join(LEARNED_PLANNERS)})",
+    )
+    e.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
+    e.add_argument("--backend", default="fast", help=f"one of {', '.join(BACKENDS)} (default: fast)")
+    e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
+
+
+def _evaluate(args: argparse.Namespace) -> dict:
+    """Run the ``evaluate`` subcommand and return the result's JSON dict."""
+    profile = get_profile(args.profile)
+    if args.planner not in PLANNERS:
+        raise PlannerError(f"unknown planner {args.planner!r}: choose one of {', '.join(PLANNERS)}")
+    learned = args.planner in LEARNED_PLANNERS
+    kwargs: dict = {}
+    if args.look_ahead is not None:
+        if not learned:
+            raise PlannerError(f"--look-ahead applies only to {', '.join(LEARNED_PLANNERS)}")
+        kwargs["look_ahead"] = check_look_ahead(args.look_ahead)
+    if learned and args.profile is not None:
+        kwargs["profile"] = profile.name
+    if args.planner == "heuristic":
+        kwargs["config"] = profile.sim
+    eval_world_seeds(args.worlds, args.seed)  # validate before building anything
+    planner = make_planner(args.planner, **kwargs)
+    with make_simulator(check_backend(args.backend), profile.sim) as sim:
+        result = evaluate(planner, args.worlds, args.seed, sim=sim, progress=not args.no_progress)
+    return result.to_json()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -57,6 +96,13 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(stats(load_dataset(out)), indent=1))
         elif args.command == "stats":
             result = stats(load_dataset(args.dir))
+            if args.json:
+                print(json.dumps(result))
+            else:
+                for key, value in result.items():
+                    print(f"{key:28s} {value}")
+        elif args.command == "evaluate":
+            result = _evaluate(args)
             if args.json:
                 print(json.dumps(result))
             else:

@@ -21,7 +21,7 @@ from tqdm.auto import tqdm
 
 from . import __version__
 from .backends import check_backend, make_simulator
-from .config import EVAL_SEED_BASE, Profile, get_profile, to_dict
+from .config import EVAL_SEED_BASE, Profile, SimConfig, get_profile, to_dict
 from .dataset import (
     DTYPES,
     FORMAT_VERSION,
@@ -82,6 +82,37 @@ def play_video(sim: Simulator, seed: int, video: int, max_primitives: int) -> di
         "lengths": np.array([n], np.int16),
         "collided": np.array([collided], np.uint8),
     }
+
+
+def fresh_pairs(n: int, seed: int, config: SimConfig | None = None) -> dict[str, np.ndarray]:
+    """``n`` new ``(image t, primitive, image t+1)`` pairs from freshly generated worlds.
+
+    One random-policy step is taken from a random safe point of each new world's video (the
+    paper's "completely new dataset" of 20 images, Section 4.1). Use a ``seed`` other than the
+    training collection's so none of these worlds was trained on.
+    """
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    from .fast_sim import FastSimulator
+
+    sim = FastSimulator(config)
+    rng = np.random.default_rng([seed, 99])
+    out: dict[str, list] = {"image": [], "prim": [], "next": [], "world_seed": []}
+    video = 0
+    while len(out["prim"]) < n:
+        v = play_video(sim, seed, video, sim.config.max_primitives)
+        video += 1
+        safe = np.flatnonzero(v["labels"] == 0)
+        if safe.size == 0:
+            continue
+        t = int(rng.choice(safe))
+        pose = v["poses"][t].astype(float)
+        end = sim.apply(pose, int(v["applied"][t])).pose
+        out["image"].append(sim.depth(pose[None])[0])
+        out["next"].append(sim.depth(end[None])[0])
+        out["prim"].append(int(v["applied"][t]))
+        out["world_seed"].append(int(v["world_seeds"][0]))
+    return {k: np.asarray(val) for k, val in out.items()}
 
 
 def _concat(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:

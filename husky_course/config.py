@@ -134,11 +134,11 @@ class TrainConfig:
 class TrainingPlan:
     """The training runs of the learning chapters, sized per profile."""
 
-    encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30))
+    encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     reward_net: TrainConfig = field(
         default_factory=lambda: TrainConfig(lr=1e-3, batch_size=64, epochs=60, patience=8)
     )
-    joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30))
+    joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     probe: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30, patience=4))
 
 
@@ -160,9 +160,9 @@ def _profiles() -> dict[str, Profile]:
             sim,
             DataConfig(videos=1_000),
             TrainingPlan(
-                encoder_decoder=TrainConfig(epochs=12, patience=3),
+                encoder_decoder=TrainConfig(epochs=20, patience=3),
                 reward_net=TrainConfig(batch_size=64, epochs=30, patience=5),
-                joint=TrainConfig(epochs=15, patience=3),
+                joint=TrainConfig(epochs=10, patience=3),
                 probe=TrainConfig(epochs=15, patience=3),
             ),
         ),

@@ -94,3 +94,51 @@ def figure_two(
     axes[2].set_title(f"world seed {world.seed}", fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def plot_curves(history: object, ax: Axes | None = None, title: str = "", ylabel: str = "BCE loss") -> Axes:
+    """Training and validation loss per epoch (a :class:`~husky_course.training.History`)."""
+    ax = ax or plt.gca()
+    train, val = history.train_loss, history.val_loss  # type: ignore[attr-defined]
+    epochs = np.arange(1, len(train) + 1)
+    ax.plot(epochs, train, "o-", ms=3, label="training")
+    ax.plot(epochs, val, "s-", ms=3, label="validation")
+    best = history.best_epoch  # type: ignore[attr-defined]
+    if best >= 0:
+        ax.axvline(best + 1, color="0.6", ls=":", label=f"best (epoch {best + 1})")
+    ax.set_xlabel("epoch")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    return ax
+
+
+def prediction_grid(
+    image: np.ndarray, true_next: np.ndarray, pred_next: np.ndarray, per_row: int = 4
+) -> plt.Figure:
+    """The paper's Figure 8: (image t | true t+1 | predicted t+1) triplets in viridis."""
+    n = len(image)
+    rows = int(np.ceil(n / per_row))
+    fig, axes = plt.subplots(rows, 3 * per_row, figsize=(1.2 * 3 * per_row, 1.35 * rows), squeeze=False)
+    for ax in axes.ravel():
+        ax.set_axis_off()
+    for i in range(n):
+        r, c = divmod(i, per_row)
+        for j, (img, name) in enumerate(((image, "t"), (true_next, "true t+1"), (pred_next, "pred t+1"))):
+            show_depth(img[i], axes[r, 3 * c + j], name if r == 0 else None)
+    fig.tight_layout(pad=0.3)
+    return fig
+
+
+def reliability_diagram(bins: dict, ax: Axes | None = None, label: str = "") -> Axes:
+    """Observed collision frequency against mean predicted probability per bin."""
+    ax = ax or plt.gca()
+    ok = bins["count"] > 0
+    ax.plot([0, 1], [0, 1], color="0.6", ls="--", lw=1)
+    ax.plot(bins["mean_p"][ok], bins["freq"][ok], "o-", label=f"{label} (ECE {float(bins['ece']):.3f})")
+    ax.set_xlabel("predicted probability of collision")
+    ax.set_ylabel("observed frequency of collision")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=8)
+    return ax

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import os
 
+import matplotlib
 import pytest
 
 os.environ.setdefault("HUSKY_PROFILE", "quick")
-os.environ.setdefault("MPLBACKEND", "Agg")
+# Headless plotting for the unit tests only. Not via MPLBACKEND: notebook kernels inherit the
+# environment, and MPLBACKEND=Agg there would replace the inline backend and drop every figure.
+matplotlib.use("Agg")
 
 
 @pytest.fixture(scope="session")

@@ -368,15 +368,33 @@ def keep_checked_outputs(nb) -> None:
 
 
 def main() -> None:
-    """Write each chapter, execute it once (quick profile) and keep only the checked outputs."""
+    """Write each chapter (or those named on the command line), execute it once in the quick
+    profile and keep only the checked outputs."""
     import os
 
     from nbclient import NotebookClient
 
     os.environ["HUSKY_PROFILE"] = "quick"
-    os.environ.setdefault("MPLBACKEND", "Agg")
+    os.environ.pop("MPLBACKEND", None)  # the inline backend must draw the figures
     ROOT.mkdir(exist_ok=True)
-    for name, cells in [("01_environment", CH1), ("02_data_collection", CH2)]:
+    import sys
+
+    from chapters import ch03, ch04, ch05
+
+    chapters = {
+        "01_environment": CH1,
+        "02_data_collection": CH2,
+        "03_encoder_decoder": ch03.CELLS,
+        "04_reward_net_failure": ch04.CELLS,
+        "05_joint_training": ch05.CELLS,
+    }
+    wanted = sys.argv[1:] or list(chapters)
+    unknown = [w for w in wanted if w not in chapters]
+    if unknown:
+        raise SystemExit(f"unknown chapter(s) {unknown}; choose from {list(chapters)}")
+    for name in wanted:
+        cells = chapters[name]
+        print("executing", name, flush=True)
         nb = nbf.v4.new_notebook()
         nb.cells = cells
         nb.metadata["kernelspec"] = {
