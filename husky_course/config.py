@@ -140,6 +140,16 @@ class TrainingPlan:
     )
     joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     probe: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30, patience=4))
+    rnn: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
+    distilled: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
+
+
+@dataclass(frozen=True)
+class EvalPlan:
+    """How many held-out worlds the planning chapters evaluate on."""
+
+    worlds: int = 500
+    seed: int = 0  #: which held-out set (see :func:`husky_course.evaluation.eval_world_seeds`)
 
 
 @dataclass(frozen=True)
@@ -150,6 +160,7 @@ class Profile:
     sim: SimConfig
     data: DataConfig
     train: TrainingPlan = field(default_factory=TrainingPlan)
+    eval: EvalPlan = field(default_factory=EvalPlan)
 
 
 def _profiles() -> dict[str, Profile]:
@@ -164,7 +175,10 @@ def _profiles() -> dict[str, Profile]:
                 reward_net=TrainConfig(batch_size=64, epochs=30, patience=5),
                 joint=TrainConfig(epochs=10, patience=3),
                 probe=TrainConfig(epochs=15, patience=3),
+                rnn=TrainConfig(epochs=10, patience=3),
+                distilled=TrainConfig(epochs=10, patience=3),
             ),
+            EvalPlan(worlds=60),
         ),
         "full": Profile("full", sim, DataConfig(videos=10_000)),
     }
@@ -208,6 +222,7 @@ __all__ = [
     "CameraConfig",
     "ConfigError",
     "DataConfig",
+    "EvalPlan",
     "PrimitiveConfig",
     "Profile",
     "SimConfig",

@@ -72,6 +72,50 @@ def survival_steps(
     return out
 
 
+def _survival_job(job: tuple) -> tuple[np.ndarray, np.ndarray]:
+    rows, seeds, poses, horizon, config = job
+    sim = FastSimulator(config)
+    out = np.zeros((len(rows), sim.library.n), np.int8)
+    for j, (seed, pose) in enumerate(zip(seeds, poses, strict=True)):
+        if sim.world is None or sim.world.seed != seed:
+            sim.load(int(seed))
+        out[j] = best_continuations(sim, pose, horizon)
+    return rows, out
+
+
+def survival_steps_parallel(
+    ds: Dataset,
+    horizon: int,
+    idx: np.ndarray | None = None,
+    config: SimConfig | None = None,
+    workers: int = 2,
+    progress: bool = True,
+) -> np.ndarray:
+    """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks of videos)."""
+    import multiprocessing as mp
+
+    if horizon < 1:
+        raise ValueError(f"horizon must be >= 1, got {horizon}")
+    idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
+    order = np.argsort(ds.episode[idx], kind="stable")
+    chunks = np.array_split(order, max(1, len(order) // 400))
+    jobs = [
+        (c, ds.world_seeds[ds.episode[idx[c]]], np.asarray(ds.poses[idx[c]], float), horizon, config)
+        for c in chunks
+    ]
+    out = np.zeros((len(idx), 25), np.int8)
+    ctx = mp.get_context("fork")
+    with ctx.Pool(max(1, workers)) as pool:
+        for rows, part in tqdm(
+            pool.imap_unordered(_survival_job, jobs),
+            total=len(jobs),
+            desc="survival labels",
+            disable=not progress,
+        ):
+            out[rows] = part
+    return out
+
+
 def best_continuations(sim: FastSimulator, pose: np.ndarray, horizon: int) -> np.ndarray:
     """For each first primitive, the most steps (<= ``horizon``) a sequence starting with it survives."""
     lib = sim.library

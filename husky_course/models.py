@@ -259,6 +259,32 @@ class SafetyNet(nn.Module):
         )
 
 
+class SurvivalNet(nn.Module):
+    """The oracle distilled: for each of the 25 primitives, how many of the next ``horizon`` steps
+    the best continuation that starts with it stays collision-free (as a fraction, via sigmoid).
+
+    Same encoder as every other model; the labels come from the simulator
+    (:func:`husky_course.labels.survival_steps`), not from the random policy's single outcome.
+    """
+
+    spec = ModelSpec("distilled", hidden=(64, 64))
+
+    def __init__(self, horizon: int = 3) -> None:
+        super().__init__()
+        self.horizon = int(horizon)
+        self.encoder = Encoder()
+        self.head = _mlp([LATENT, *self.spec.hidden, N_PRIMITIVES])
+
+    def survival(self, image: Tensor) -> Tensor:
+        """Predicted steps survived ``(B, 25)`` in [0, horizon]."""
+        return torch.sigmoid(self.head(self.encoder(image))) * self.horizon
+
+    def loss(self, batch: dict[str, Tensor]) -> Tensor:
+        """BCE between the predicted and the simulator's survival fraction, over all 25 primitives."""
+        target = batch["survival"].float() / self.horizon
+        return F.binary_cross_entropy_with_logits(self.head(self.encoder(batch["image"])), target)
+
+
 class Probe(nn.Module):
     """A small MLP regressor (one hidden layer): how much of a quantity do features hold?"""
 

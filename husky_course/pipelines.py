@@ -5,7 +5,8 @@
   reward set (all unsafe + 50 % of the safe images) exactly as the paper did;
 * :func:`get_safety_net` -- a CNN trained end to end on safety alone (chapter 4's control);
 * :func:`get_joint` -- Fig. 9: encoder, decoder and a primitive-conditioned safety head trained
-  together on every image.
+  together on every image;
+* :func:`get_rnn` -- Fig. 10: the RNN look-ahead, trained on every prefix of every video.
 
 Each call trains only if the artifact resolver has no finished checkpoint for the same dataset,
 architecture and training config (``artifacts/<profile>/models/<name>-<hash>/model.pt``), so later
@@ -26,7 +27,7 @@ from .artifacts import get_dataset, model_dir, runs_dir
 from .config import Profile, TrainConfig, config_hash, get_profile
 from .dataset import Dataset, encoder_decoder_pairs, reward_set, val_videos
 from .models import Encoder, EncoderDecoder, JointModel, LatentRewardNet, SafetyNet
-from .training import History, fit
+from .training import CheckpointError, History, fit
 
 
 @dataclass
@@ -76,6 +77,7 @@ def _train(
     progress: bool,
     extra: dict | None = None,
     parameters: list[nn.Parameter] | None = None,
+    load_only: bool = False,
 ) -> Trained:
     fingerprint = {
         "model": model.spec.to_dict(),
@@ -84,6 +86,11 @@ def _train(
         **(extra or {}),
     }  # type: ignore[union-attr]
     run = model_dir(name, fingerprint, profile)
+    if load_only and not (run / "model.pt").is_file():
+        raise CheckpointError(
+            f"no trained {name} model for profile {profile.name!r} (expected {run / 'model.pt'}); "
+            f"train it with `python -m husky_course train {name} --profile {profile.name}`"
+        )
     hist = fit(
         model,
         train,
@@ -264,3 +271,89 @@ def collision_probs(model: JointModel, images: np.ndarray | Tensor, batch: int =
     return torch.cat(
         [model.collision_probs(images[i : i + batch]) for i in range(0, len(images), batch)]
     ).numpy()
+
+
+def get_rnn(profile: Profile | str | None = None, progress: bool = True, load_only: bool = False) -> Trained:
+    """The RNN look-ahead (Fig. 10), trained on sequences starting at every training image."""
+    from .rnn_model import HORIZON, RNNLookahead, sequence_data
+
+    profile = _profile(profile)
+    ds = get_dataset(profile, progress=progress)
+    tr, va = split_all(ds, profile.data.seed)
+    cfg = profile.train.rnn
+    torch.manual_seed(cfg.seed)
+    model = RNNLookahead()
+    model.bank = images_tensor(ds)
+    trained = _train(
+        "rnn",
+        model,
+        sequence_data(ds, tr),
+        sequence_data(ds, va),
+        cfg,
+        ds,
+        profile,
+        progress,
+        extra={"h": HORIZON},
+        load_only=load_only,
+    )
+    model.bank = None
+    return trained
+
+
+# --- the oracle distilled ---------------------------------------------------------------------------
+DISTILL_HORIZON = 3
+
+
+def get_survival_labels(profile: Profile | str | None = None, progress: bool = True) -> np.ndarray:
+    """Simulator survival labels ``(N, 25)`` (horizon :data:`DISTILL_HORIZON`) for every pool image.
+
+    Cached as an artifact keyed by the dataset and horizon; built with 2 worker processes.
+    """
+    from .dataset import atomic_save_npy, load_npy
+    from .labels import survival_steps_parallel
+
+    profile = _profile(profile)
+    ds = get_dataset(profile, progress=progress)
+    path = (
+        model_dir("labels", {"dataset": dataset_id(ds), "survival_h": DISTILL_HORIZON}, profile)
+        / "survival.npy"
+    )
+    if path.is_file():
+        return load_npy(path)
+    labels = survival_steps_parallel(ds, DISTILL_HORIZON, config=profile.sim, progress=progress)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_save_npy(path, labels)
+    return labels
+
+
+def get_distilled(
+    profile: Profile | str | None = None, progress: bool = True, load_only: bool = False
+) -> Trained:
+    """:class:`~husky_course.models.SurvivalNet` trained on every training image's survival labels."""
+    from .models import SurvivalNet
+
+    profile = _profile(profile)
+    ds = get_dataset(profile, progress=progress)
+    tr, va = split_all(ds, profile.data.seed)
+    cfg = profile.train.distilled
+    torch.manual_seed(cfg.seed)
+    model = SurvivalNet(DISTILL_HORIZON)
+    extra = {"h": DISTILL_HORIZON}
+    if load_only:  # no data needed: the checkpoint is loaded (or a clear error raised)
+        return _train("distilled", model, {}, {}, cfg, ds, profile, False, extra=extra, load_only=True)
+    survival = torch.from_numpy(get_survival_labels(profile, progress))
+    images = images_tensor(ds)
+
+    def data(idx: np.ndarray) -> dict[str, Tensor]:
+        t = torch.from_numpy(idx)
+        return {"image": images[t], "survival": survival[t]}
+
+    return _train("distilled", model, data(tr), data(va), cfg, ds, profile, progress, extra=extra)
+
+
+@torch.no_grad()
+def survival_predictions(model: nn.Module, images: np.ndarray | Tensor, batch: int = 2048) -> np.ndarray:
+    """Predicted steps survived ``(N, 25)`` from a :class:`~husky_course.models.SurvivalNet`."""
+    model.eval()
+    images = torch.as_tensor(np.asarray(images)).float()
+    return torch.cat([model.survival(images[i : i + batch]) for i in range(0, len(images), batch)]).numpy()  # type: ignore[operator]

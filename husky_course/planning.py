@@ -20,8 +20,8 @@ from .camera import denormalize_depth, pixel_tangents
 from .config import SimConfig
 from .sim import Simulator
 
-PLANNERS = ("random", "heuristic", "lookahead", "rnn", "oracle")
-LEARNED_PLANNERS = ("lookahead", "rnn")
+PLANNERS = ("random", "heuristic", "lookahead", "rnn", "distilled", "oracle")
+LEARNED_PLANNERS = ("lookahead", "rnn", "distilled")
 
 
 class PlannerError(ValueError):

@@ -178,14 +178,14 @@ def fit(
         raise ValueError(f"invalid training config {cfg}")
     if not hasattr(model, "loss"):
         raise TypeError(f"{type(model).__name__} has no loss(batch) method")
-    n_train = _n_rows(train)
-    _n_rows(val)
     fingerprint = {**(fingerprint or {}), "train": asdict(cfg)}
     run = Path(run_dir) if run_dir is not None else None
+    if run is not None and (run / "model.pt").is_file():
+        return load_model(run / "model.pt", model, fingerprint)
+    n_train = _n_rows(train)
+    _n_rows(val)
     if run is not None:
         run.mkdir(parents=True, exist_ok=True)
-        if (run / "model.pt").is_file():
-            return load_model(run / "model.pt", model, fingerprint)
 
     params = parameters if parameters is not None else [p for p in model.parameters() if p.requires_grad]
     optim = torch.optim.Adam(params, lr=cfg.lr, weight_decay=cfg.weight_decay, fused=True)

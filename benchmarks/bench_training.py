@@ -1,0 +1,117 @@
+"""Training time of every model of the learning chapters (3-5), per model and in total.
+
+Run: ``python benchmarks/bench_training.py [--profile full] [--fresh]``.
+
+Without ``--fresh`` it trains into the normal artifact store (``artifacts/<profile>/``) so the
+book reuses the result; a model that is already there is not retrained and its time is read from
+the training history stored in its checkpoint. With ``--fresh`` everything is trained in a
+temporary artifact store (the dataset is copied in) and nothing is reused. Prints one line per
+model, the total against the 15-minute target, and the validation AUC of the paper's reward net
+and of the joint model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tempfile
+import time
+
+import numpy as np
+import torch
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", default="full")
+    parser.add_argument("--fresh", action="store_true", help="train everything in a temporary store")
+    args = parser.parse_args()
+
+    tmp = None
+    if args.fresh:
+        from husky_course.artifacts import dataset_dir
+
+        src = dataset_dir(args.profile)
+        tmp = tempfile.mkdtemp(prefix="husky-bench-")
+        os.environ["HUSKY_ARTIFACTS"] = tmp
+        if (src / "meta.json").is_file():
+            shutil.copytree(src, dataset_dir(args.profile))
+
+    from husky_course import diagnosis, pipelines
+    from husky_course.artifacts import get_dataset
+    from husky_course.config import get_profile
+    from husky_course.dataset import reward_set
+    from husky_course.labels import nearest_obstacle_distance
+    from husky_course.metrics import classification
+
+    profile = get_profile(args.profile)
+    t0 = time.perf_counter()
+    ds = get_dataset(profile)
+    rows: list[tuple[str, float, str]] = [("dataset (collect or load)", time.perf_counter() - t0, "")]
+
+    def timed(name: str, fn):
+        start = time.perf_counter()
+        out = fn()
+        wall = time.perf_counter() - start
+        hist = getattr(out, "history", None)
+        trained = hist is not None and wall > 0.5 * hist.seconds
+        secs = wall if trained or hist is None else hist.seconds
+        note = "" if trained or hist is None else "(loaded; time from its checkpoint)"
+        if hist is not None:
+            note = f"{len(hist.train_loss)} epochs {note}"
+        rows.append((name, secs, note))
+        return out
+
+    ed = timed("encoder + decoder", lambda: pipelines.get_encoder_decoder(profile))
+    _, rn = timed("reward net (paper)", lambda: pipelines.get_reward_net(profile))
+    rows[-1] = ("reward net (paper)", rn.history.seconds, f"{len(rn.history.train_loss)} epochs")
+    img = timed("safety CNN, image only", lambda: pipelines.get_safety_net(False, profile))
+    prim = timed("safety CNN, image + primitive", lambda: pipelines.get_safety_net(True, profile))
+    joint = timed("joint model", lambda: pipelines.get_joint(profile))
+
+    rs = reward_set(ds, seed=profile.data.seed)
+    images = pipelines.images_tensor(ds)
+    cfg16 = diagnosis.train_config_for_variants(profile.train.reward_net)
+    timed(
+        "chapter 4 variants (6 reward nets)",
+        lambda: [
+            diagnosis.run_reward_variant(v, ds, rs.train, rs.val, ed.model.encoder, cfg16, images)
+            for v in diagnosis.VARIANTS
+        ],
+    )
+
+    def probes():
+        dist = nearest_obstacle_distance(ds, config=profile.sim)
+        z = pipelines.encode(ed.model.encoder, images)
+        tr, va = rs.train, rs.val
+        diagnosis.probe_r2(ds.images[tr], dist[tr], ds.images[va], dist[va], profile.train.probe)
+        diagnosis.probe_r2(z[tr], dist[tr], z[va], dist[va], profile.train.probe)
+
+    timed("chapter 4 probes", probes)
+
+    total = sum(s for name, s, _ in rows[1:])
+    print(f"profile {profile.name}: {len(ds)} images, torch threads {torch.get_num_threads()}")
+    for name, secs, note in rows:
+        print(f"  {name:38s} {secs:8.1f} s  {note}")
+    print(f"  {'total training':38s} {total:8.1f} s  = {total / 60:.1f} min (target <= 15 min)")
+
+    y = ds.labels[rs.val]
+    z = pipelines.encode(ed.model.encoder, images[torch.from_numpy(rs.val)])
+    with torch.no_grad():
+        p_paper = rn.model(torch.from_numpy(z))[:, 0].numpy()
+    p_joint = pipelines.collision_probs(joint.model, ds.images[rs.val])[np.arange(len(rs.val)), ds.applied[rs.val]]
+    d = pipelines.safety_data(ds, rs.val)
+    with torch.no_grad():
+        p_img = torch.sigmoid(img.model.logit(d["image"])).numpy()
+        p_prim = torch.sigmoid(prim.model.logit(d["image"], d["prim"])).numpy()
+    for name, p in [("paper reward net", p_paper), ("CNN image only", p_img), ("CNN image+prim", p_prim),
+                    ("joint model", p_joint)]:
+        c = classification(y, p)
+        print(f"  {name:20s} AUC {c.auc:.3f}  accuracy {c.accuracy:.3f}  majority {c.majority:.3f}  n {c.n}")
+    if tmp:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
