@@ -241,25 +241,26 @@ def split_all(ds: Dataset, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def get_joint(
-    profile: Profile | str | None = None, progress: bool = True, safety_weight: float = 1.0
+    profile: Profile | str | None = None,
+    progress: bool = True,
+    safety_weight: float = 1.0,
+    load_only: bool = False,
 ) -> Trained:
-    """The joint model (Fig. 9) trained on every image of the training videos."""
+    """The joint model (Fig. 9) trained on every image of the training videos.
+
+    With ``load_only`` a missing checkpoint raises :class:`CheckpointError` instead of training.
+    """
     profile = _profile(profile)
     ds = get_dataset(profile, progress=progress)
-    tr, va = split_all(ds, profile.data.seed)
     cfg = profile.train.joint
     torch.manual_seed(cfg.seed)
     model = JointModel(safety_weight)
+    extra = {"w": safety_weight}
+    if load_only:
+        return _train("joint", model, {}, {}, cfg, ds, profile, False, extra=extra, load_only=True)
+    tr, va = split_all(ds, profile.data.seed)
     return _train(
-        "joint",
-        model,
-        joint_data(ds, tr),
-        joint_data(ds, va),
-        cfg,
-        ds,
-        profile,
-        progress,
-        extra={"w": safety_weight},
+        "joint", model, joint_data(ds, tr), joint_data(ds, va), cfg, ds, profile, progress, extra=extra
     )
 
 
@@ -279,25 +280,28 @@ def get_rnn(profile: Profile | str | None = None, progress: bool = True, load_on
 
     profile = _profile(profile)
     ds = get_dataset(profile, progress=progress)
-    tr, va = split_all(ds, profile.data.seed)
     cfg = profile.train.rnn
     torch.manual_seed(cfg.seed)
     model = RNNLookahead()
+    extra = {"h": HORIZON}
+    if load_only:
+        return _train("rnn", model, {}, {}, cfg, ds, profile, False, extra=extra, load_only=True)
+    tr, va = split_all(ds, profile.data.seed)
     model.bank = images_tensor(ds)
-    trained = _train(
-        "rnn",
-        model,
-        sequence_data(ds, tr),
-        sequence_data(ds, va),
-        cfg,
-        ds,
-        profile,
-        progress,
-        extra={"h": HORIZON},
-        load_only=load_only,
-    )
-    model.bank = None
-    return trained
+    try:
+        return _train(
+            "rnn",
+            model,
+            sequence_data(ds, tr),
+            sequence_data(ds, va),
+            cfg,
+            ds,
+            profile,
+            progress,
+            extra=extra,
+        )
+    finally:
+        model.bank = None
 
 
 # --- the oracle distilled ---------------------------------------------------------------------------

@@ -90,14 +90,14 @@ def test_bad_observations_raise(sim, name):
 
 
 def test_registry_errors(monkeypatch):
-    assert PLANNERS == ("random", "heuristic", "lookahead", "rnn", "oracle")
-    with pytest.raises(PlannerError, match="choose one of random, heuristic, lookahead, rnn, oracle"):
+    assert set(PLANNERS) == {"random", "heuristic", "lookahead", "rnn", "distilled", "oracle"}
+    with pytest.raises(PlannerError, match="choose one of random, heuristic, lookahead, rnn, distilled, oracle"):
         make_planner("astar")
     assert issubclass(PlannerError, ValueError)
     with pytest.raises(PlannerError, match="bad arguments"):
         make_planner("heuristic", look_ahead=2)
     monkeypatch.setitem(sys.modules, "husky_course.learned_planners", None)  # module unavailable
-    for name in ("lookahead", "rnn"):
+    for name in ("lookahead", "rnn", "distilled"):
         with pytest.raises(PlannerError, match="learned.*checkpoints"):
             make_planner(name, look_ahead=1)
 
