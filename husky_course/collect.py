@@ -91,8 +91,8 @@ def fresh_pairs(n: int, seed: int, config: SimConfig | None = None) -> dict[str,
     paper's "completely new dataset" of 20 images, Section 4.1). Use a ``seed`` other than the
     training collection's so none of these worlds was trained on.
     """
-    if n < 1:
-        raise ValueError(f"n must be >= 1, got {n}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n must be >= 1, got {n!r} (an integer number of pairs)")
     from .fast_sim import FastSimulator
 
     sim = FastSimulator(config)
@@ -172,6 +172,8 @@ def collect(
         raise ValueError(f"the number of videos must be a positive integer, got {videos!r}")
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"the collection seed must be an integer, got {seed!r}")
     world_seed_for(seed, videos - 1)  # validates seed and video count
     profile = replace(
         profile, data=replace(profile.data, videos=int(videos), seed=int(seed), backend=backend)

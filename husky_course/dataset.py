@@ -143,7 +143,15 @@ def load_dataset(path: str | Path, verify: bool = True, mmap: bool = False) -> D
             f"{path} holds no finished dataset (no meta.json): run "
             f"`python -m husky_course collect --out {path}` to build or finish it"
         )
-    meta = json.loads(meta_path.read_text())
+    try:
+        meta = json.loads(meta_path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DatasetError(
+            f"{meta_path} is truncated or corrupted ({exc}); collect the dataset again"
+        ) from exc
+    missing = [k for k in ("format", "images", "videos", "sha256") if k not in meta]
+    if missing:
+        raise DatasetError(f"{meta_path} lacks {', '.join(missing)}; collect the dataset again")
     if meta.get("format") != FORMAT_VERSION:
         raise DatasetError(f"{path}: dataset format {meta.get('format')} != {FORMAT_VERSION}")
     arrays = {}

@@ -122,8 +122,17 @@ def run_reward_variant(
         torch.manual_seed(cfg.seed + 1)
         encoder = Encoder()
         encoder.eval()
-    scale = 5.0 if variant.depth_in_metres else 1.0
-    z = encode(encoder, images.float() * scale)
+    if variant.depth_in_metres:  # bypasses the [0, 1] input check on purpose: that is the slip
+        encoder.eval()
+        with torch.no_grad():
+            z = torch.cat(
+                [
+                    encoder.unchecked(images[i : i + 2048].float().unsqueeze(1) * 5.0)
+                    for i in range(0, len(images), 2048)
+                ]
+            ).numpy()
+    else:
+        z = encode(encoder, images)
     labels = shifted_labels(ds) if variant.label_shift else ds.labels
     torch.manual_seed(cfg.seed)
     net = _VariantNet(variant)

@@ -20,7 +20,10 @@ OCCUPIED_BELOW = 0.5
 
 
 def _check_binary(y: np.ndarray, score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    y = np.asarray(y).astype(bool).ravel()
+    y = np.asarray(y)
+    if y.dtype.kind == "f" and not np.all(np.isfinite(y)):
+        raise ValueError("labels contain NaN or inf")
+    y = y.astype(bool).ravel()
     score = np.asarray(score, float).ravel()
     if y.shape != score.shape:
         raise ValueError(f"labels {y.shape} and scores {score.shape} differ in length")

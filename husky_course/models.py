@@ -57,6 +57,12 @@ def check_images(x: Tensor) -> Tensor:
         raise ValueError(f"depth images must have shape (B, 50, 50) or (B, 1, 50, 50), got {tuple(x.shape)}")
     if not x.dtype.is_floating_point:
         raise ValueError(f"depth images must be floating point in [0, 1], got dtype {x.dtype}")
+    if x.numel():
+        if not bool(torch.isfinite(x).all()):
+            raise ValueError("depth images contain NaN or inf values")
+        lo, hi = float(x.min()), float(x.max())
+        if lo < 0.0 or hi > 1.0:
+            raise ValueError(f"depth images must be normalised to [0, 1], got values in [{lo:.3g}, {hi:.3g}]")
     return x.float()
 
 
@@ -102,8 +108,11 @@ class Encoder(nn.Module):
         self.fc = nn.Linear(16 * 7 * 7, latent)
 
     def forward(self, x: Tensor) -> Tensor:
-        x = check_images(x).contiguous(memory_format=torch.channels_last)
-        return self.fc(self.features(x))
+        return self.unchecked(check_images(x))
+
+    def unchecked(self, x: Tensor) -> Tensor:
+        """The encoder without input checks, for ``(B, 1, 50, 50)`` float input (experiments only)."""
+        return self.fc(self.features(x.contiguous(memory_format=torch.channels_last)))
 
 
 class Decoder(nn.Module):

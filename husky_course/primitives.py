@@ -59,8 +59,17 @@ class PrimitiveLibrary:
 
     def paths_from(self, poses: np.ndarray, indices: np.ndarray) -> np.ndarray:
         """Vectorised :meth:`path_from`: ``poses (B, 3)``, ``indices (B,)`` -> ``(B, samples, 3)``."""
-        poses = np.asarray(poses, float).reshape(-1, 3)
-        local = self.local_paths[np.asarray(indices)]
+        poses = np.asarray(poses, float)
+        if poses.shape[-1:] != (3,) or poses.ndim > 2:
+            raise ValueError(f"a pose is (x, y, yaw): expected shape (3,) or (B, 3), got {poses.shape}")
+        poses = poses.reshape(-1, 3)
+        idx = np.asarray(indices)
+        if idx.size and (not np.issubdtype(idx.dtype, np.integer) or idx.min() < 0 or idx.max() >= self.n):
+            bad = idx[(idx < 0) | (idx >= self.n)] if np.issubdtype(idx.dtype, np.integer) else idx
+            raise PrimitiveError(f"primitive index {bad.ravel()[0]!r} out of range 0..{self.n - 1}")
+        if idx.shape != (len(poses),):
+            raise ValueError(f"need one primitive index per pose: {idx.shape} indices for {len(poses)} poses")
+        local = self.local_paths[idx]
         c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
         out = np.empty_like(local)
         out[..., 0] = poses[:, 0:1] + c * local[..., 0] - s * local[..., 1]

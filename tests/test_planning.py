@@ -91,7 +91,8 @@ def test_bad_observations_raise(sim, name):
 
 def test_registry_errors(monkeypatch):
     assert set(PLANNERS) == {"random", "heuristic", "lookahead", "rnn", "distilled", "oracle"}
-    with pytest.raises(PlannerError, match="choose one of random, heuristic, lookahead, rnn, distilled, oracle"):
+    names = "random, heuristic, lookahead, rnn, distilled, oracle"
+    with pytest.raises(PlannerError, match=f"choose one of {names}"):
         make_planner("astar")
     assert issubclass(PlannerError, ValueError)
     with pytest.raises(PlannerError, match="bad arguments"):
