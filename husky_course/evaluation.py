@@ -134,6 +134,8 @@ class Episode:
         Seconds spent in ``planner.act`` per step.
     reset_time : float
         Seconds spent in ``planner.reset`` (where the oracle plans).
+    observations, scores : list
+        Filled only by ``run_episode(..., record=True)``.
     """
 
     world_seed: int
@@ -145,10 +147,18 @@ class Episode:
     success: bool
     decision_times: list[float]
     reset_time: float = 0.0
+    observations: list[np.ndarray] = field(default_factory=list)  #: with ``record=True``: image per step
+    scores: list[np.ndarray | None] = field(default_factory=list)  #: with ``record=True``: planner scores
 
 
-def run_episode(planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = 10) -> Episode:
-    """Run ``planner`` in world ``world_seed`` until a collision or ``max_primitives`` primitives."""
+def run_episode(
+    planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = 10, record: bool = False
+) -> Episode:
+    """Run ``planner`` in world ``world_seed`` until a collision or ``max_primitives`` primitives.
+
+    With ``record`` the episode also keeps every observation and the planner's ``last_scores``
+    (for step-by-step figures and widgets).
+    """
     max_primitives = _check_int(max_primitives, "max_primitives", 1, 10**6)
     world = sim.load(int(world_seed))
     pose = world.start.copy()
@@ -159,10 +169,15 @@ def run_episode(planner: Planner, sim: Simulator, world_seed: int, max_primitive
     actions: list[int] = []
     poses, paths, times = [pose], [pose[None]], []
     collided = False
+    observations: list[np.ndarray] = []
+    scores: list[np.ndarray | None] = []
     for _ in range(max_primitives):
         t0 = time.perf_counter()
         action = planner.act(obs, pose.copy())
         times.append(time.perf_counter() - t0)
+        if record:
+            observations.append(obs)
+            scores.append(None if planner.last_scores is None else np.array(planner.last_scores))
         action = sim.library.check_index(action)
         result = sim.apply(pose, action)
         actions.append(action)
@@ -184,6 +199,8 @@ def run_episode(planner: Planner, sim: Simulator, world_seed: int, max_primitive
         success=not collided and len(actions) == max_primitives,
         decision_times=times,
         reset_time=reset_time,
+        observations=observations,
+        scores=scores,
     )
 
 
@@ -288,3 +305,25 @@ def evaluate(
         crossable_rate=float(np.mean(crossable)) if crossable else None,
         episodes=episodes,
     )
+
+
+def collision_cause(episode: Episode, sim: Simulator) -> str:
+    """Why an episode's last primitive collided, seen from the decision pose.
+
+    ``"wall"`` (a side wall), ``"out of view"`` (the obstacle hit was outside the camera's
+    horizontal field of view when the primitive was chosen) or ``"in view"``.
+    """
+    if not episode.collided:
+        raise ValueError("the episode did not collide")
+    world = sim.load(episode.world_seed)
+    decision = episode.poses[-2]
+    path = sim.library.path_from(decision, episode.actions[-1])
+    hit_pose = path[sim.contact_along(path)]
+    radius = world.config.robot_radius
+    if abs(hit_pose[1]) + radius > world.wall_y:
+        return "wall"
+    gap = np.hypot(*(world.obstacles[:, :2] - hit_pose[:2]).T) - world.obstacles[:, 2] - radius
+    ox, oy = world.obstacles[int(np.argmin(gap)), :2] - decision[:2]
+    bearing = abs(np.degrees(np.arctan2(oy, ox) - decision[2]))
+    half_fov = sim.config.camera.fov_deg / 2.0
+    return "out of view" if bearing > half_fov else "in view"

@@ -47,6 +47,21 @@ def _image(obs: np.ndarray) -> torch.Tensor:
     return torch.from_numpy(check_observation(obs))[None]
 
 
+class single_thread:  # noqa: N801 (used like a function: ``with single_thread():``)
+    """Run torch on one thread inside the block.
+
+    One decision is a handful of tiny matrix products; splitting them across threads costs more in
+    synchronisation than it saves, and on a busy 2-core machine it made decisions 100x slower.
+    """
+
+    def __enter__(self) -> None:
+        self.saved = torch.get_num_threads()
+        torch.set_num_threads(1)
+
+    def __exit__(self, *exc: object) -> None:
+        torch.set_num_threads(self.saved)
+
+
 @torch.no_grad()
 def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str = "applied") -> np.ndarray:
     """Algorithm 1's final ``prim_scores`` (lower is better), batched over the 25 primitives."""
@@ -59,9 +74,9 @@ def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str 
         if reward == "applied":
             scores += weight * torch.sigmoid(model.safety_logits(z))[0]
             best = int(torch.argmin(scores))
-            z = model.encoder(model.decoder(z, prims[best : best + 1]))
+            z = model.encoder.unchecked(model.decoder(z, prims[best : best + 1])[:, None])
         else:
-            z_list = model.encoder(model.decoder(z.expand(N_PRIMITIVES, -1), prims))
+            z_list = model.encoder.unchecked(model.decoder(z.expand(N_PRIMITIVES, -1), prims)[:, None])
             scores += weight * torch.sigmoid(model.safety_logits(z_list)).mean(1)
             best = int(torch.argmin(scores))
             z = z_list[best : best + 1]
@@ -108,7 +123,8 @@ class LookaheadPlanner(Planner):
         self.reward = reward
 
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        self.last_scores = algorithm1(self.model, obs, self.look_ahead, self.reward)
+        with single_thread():
+            self.last_scores = algorithm1(self.model, obs, self.look_ahead, self.reward)
         return int(np.argmin(self.last_scores))
 
 
@@ -137,6 +153,10 @@ class RNNPlanner(Planner):
 
     @torch.no_grad()
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        with single_thread():
+            return self._act(obs)
+
+    def _act(self, obs: np.ndarray) -> int:
         h = self.model.start(_image(obs))
         _, col = self.model.rollout(h.expand(len(self.sequences), -1), self.sequences, images=False)
         risk = 1.0 - torch.prod(1.0 - torch.sigmoid(col), dim=1)
@@ -163,7 +183,8 @@ class DistilledPlanner(Planner):
 
     @torch.no_grad()
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        s = self.model.survival(_image(obs))[0].numpy()
+        with single_thread():
+            s = self.model.survival(_image(obs))[0].numpy()
         k = 2 * self.smooth + 1
         padded = np.pad(s, self.smooth, mode="constant", constant_values=0.0)
         neighbourhood = np.convolve(padded, np.ones(k) / k, mode="valid")

@@ -8,12 +8,19 @@ once at its default value, so the page never shows an empty box.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 import matplotlib.pyplot as plt
+import numpy as np
+import torch
 
 from .backends import make_simulator
 from .config import SimConfig
-from .plotting import figure_two
+from .evaluation import Episode, eval_world_seeds, run_episode
+from .fast_sim import FastSimulator
+from .plotting import draw_path, draw_robot, draw_world, figure_two, show_depth
+from .sim import Simulator
+from .world import World
 
 
 def widgets_live() -> bool:
@@ -60,3 +67,174 @@ def world_explorer(default_seed: int = 0, backend: str = "fast") -> None:
 
     slider.observe(redraw, names="value")
     display(w.VBox([slider, out]))
+
+
+# --- planning widgets (chapter 7) -------------------------------------------------------------------
+def predicted_next_image(planner: object, obs: np.ndarray, action: int) -> np.ndarray | None:
+    """What a learned planner's model expects to see after ``action`` (``None`` if it cannot say)."""
+    model = getattr(planner, "model", None)
+    image = torch.from_numpy(np.asarray(obs, np.float32))[None]
+    with torch.no_grad():
+        if model is not None and hasattr(model, "decoder"):
+            return model.decoder(model.encoder(image), torch.tensor([int(action)]))[0].numpy()
+        if model is not None and hasattr(model, "rollout"):
+            img, _ = model.rollout(model.start(image), torch.tensor([[int(action)]]))
+            return torch.sigmoid(img[0, 0]).numpy()
+    return None
+
+
+def draw_planner_step(
+    world: World, episode: Episode, step: int, planner: object, sim: Simulator
+) -> plt.Figure:
+    """One decision of a recorded episode: map so far, scores, current / predicted / real next image."""
+    step = int(np.clip(step, 0, len(episode.actions) - 1))
+    action = episode.actions[step]
+    fig = plt.figure(figsize=(12, 4.6))
+    grid = fig.add_gridspec(2, 4, width_ratios=[2.4, 1, 1, 1])
+    ax_map = fig.add_subplot(grid[:, 0])
+    draw_world(world, ax_map, episode.poses[step])
+    ends = np.cumsum([0] + [sim.library.config.samples] * len(episode.actions)) + 1
+    draw_path(episode.path[: ends[step + 1]], ax_map, lw=2)
+    if step + 1 < len(episode.poses):
+        draw_robot(
+            episode.poses[step + 1],
+            world.config.robot_radius,
+            ax_map,
+            "tab:red" if (episode.collided and step == len(episode.actions) - 1) else "tab:purple",
+        )
+    outcome = "collision" if episode.collided else ("crossed" if episode.success else "stopped")
+    ax_map.set_title(f"world {world.seed}: step {step + 1} of {len(episode.actions)} ({outcome})", fontsize=9)
+    ax_bar = fig.add_subplot(grid[0, 1:])
+    scores = episode.scores[step] if step < len(episode.scores) else None
+    if scores is not None:
+        finite = np.where(np.isfinite(scores), scores, np.nan)
+        colours = ["tab:red" if k == action else "tab:blue" for k in range(len(finite))]
+        ax_bar.bar(np.arange(len(finite)), finite, color=colours)
+        ax_bar.set_ylabel("score (lower is better)", fontsize=8)
+    else:
+        ax_bar.text(0.5, 0.5, "this planner keeps no scores", ha="center", va="center")
+    ax_bar.set_xlabel(f"primitive (chosen: {action}; 0 = far right, 24 = far left)", fontsize=8)
+    obs = episode.observations[step]
+    predicted = predicted_next_image(planner, obs, action)
+    real = (
+        None
+        if (episode.collided and step == len(episode.actions) - 1)
+        else sim.depth(episode.poses[step + 1][None])[0]
+    )
+    for j, (img, title) in enumerate(
+        ((obs, "image now"), (predicted, "predicted next"), (real, "real next"))
+    ):
+        ax = fig.add_subplot(grid[1, 1 + j])
+        if img is None:
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, "collision" if title == "real next" else "no prediction", ha="center")
+        else:
+            show_depth(img, ax, title)
+    fig.tight_layout()
+    return fig
+
+
+def planner_stepper(
+    make: Callable[[str, int], object],
+    planners: tuple[str, ...],
+    default_seed: int,
+    default_planner: str,
+    default_look_ahead: int = 2,
+    default_step: int = 0,
+    seeds: tuple[int, int] = (0, 99),
+    sim: Simulator | None = None,
+) -> None:
+    """Step through a planner's decisions in a held-out world (static figure at the defaults offline).
+
+    ``make(name, look_ahead)`` builds a planner; world seeds are held-out evaluation seeds
+    (:func:`husky_course.evaluation.eval_world_seeds`), indexed by the slider.
+    """
+    sim = sim or FastSimulator()
+    cache: dict[tuple, tuple] = {}
+
+    def figure(seed_index: int, name: str, look_ahead: int, step: int) -> plt.Figure:
+        key = (seed_index, name, look_ahead)
+        if key not in cache:
+            planner = make(name, look_ahead)
+            world_seed = int(eval_world_seeds(seed_index + 1)[seed_index])
+            cache[key] = (planner, run_episode(planner, sim, world_seed, record=True))
+        planner, episode = cache[key]
+        return draw_planner_step(
+            sim.world if sim.world and sim.world.seed == episode.world_seed else sim.load(episode.world_seed),
+            episode,
+            step,
+            planner,
+            sim,
+        )
+
+    fig = figure(default_seed, default_planner, default_look_ahead, default_step)
+    plt.show()
+    plt.close(fig)
+    if not widgets_live():
+        return
+    import ipywidgets as w
+    from IPython.display import display
+
+    out = w.Output()
+    seed = w.IntSlider(value=default_seed, min=seeds[0], max=seeds[1], description="world")
+    name = w.Dropdown(options=list(planners), value=default_planner, description="planner")
+    look = w.IntSlider(value=default_look_ahead, min=0, max=4, description="look_ahead")
+    step = w.IntSlider(value=default_step, min=0, max=9, description="step")
+
+    def redraw(change: dict | None = None) -> None:
+        with out:
+            out.clear_output(wait=True)
+            f = figure(seed.value, name.value, look.value, step.value)
+            plt.show()
+            plt.close(f)
+
+    for control in (seed, name, look, step):
+        control.observe(redraw, names="value")
+    display(w.VBox([w.HBox([seed, name]), w.HBox([look, step]), out]))
+
+
+def primitive_explorer(
+    model: object, default_seed: int = 0, default_primitive: int = 12, sim: Simulator | None = None
+) -> None:
+    """Choose a primitive: the model's predicted next depth image beside the simulator's."""
+    sim = sim or FastSimulator()
+
+    def figure(seed_index: int, k: int) -> plt.Figure:
+        world = sim.load(int(eval_world_seeds(seed_index + 1)[seed_index]))
+        obs = sim.depth(world.start[None])[0]
+        result = sim.apply(world.start, int(k))
+        predicted = predicted_next_image(type("P", (), {"model": model})(), obs, int(k))
+        fig, axes = plt.subplots(1, 4, figsize=(12, 3), gridspec_kw={"width_ratios": [2.2, 1, 1, 1]})
+        draw_world(world, axes[0])
+        draw_path(result.path, axes[0], "tab:red" if result.collided else "tab:green", lw=2)
+        axes[0].set_title(f"primitive {k}: {'collides' if result.collided else 'safe'}", fontsize=9)
+        show_depth(obs, axes[1], "image now")
+        if predicted is not None:
+            show_depth(predicted, axes[2], "predicted next")
+        real = sim.depth(result.pose[None])[0]
+        show_depth(real, axes[3], "real next" + (" (stopped at contact)" if result.collided else ""))
+        fig.tight_layout()
+        return fig
+
+    fig = figure(default_seed, default_primitive)
+    plt.show()
+    plt.close(fig)
+    if not widgets_live():
+        return
+    import ipywidgets as w
+    from IPython.display import display
+
+    out = w.Output()
+    seed = w.IntSlider(value=default_seed, min=0, max=99, description="world")
+    prim = w.IntSlider(value=default_primitive, min=0, max=24, description="primitive")
+
+    def redraw(change: dict | None = None) -> None:
+        with out:
+            out.clear_output(wait=True)
+            f = figure(seed.value, prim.value)
+            plt.show()
+            plt.close(f)
+
+    for control in (seed, prim):
+        control.observe(redraw, names="value")
+    display(w.VBox([w.HBox([seed, prim]), out]))

@@ -379,7 +379,7 @@ def main() -> None:
     ROOT.mkdir(exist_ok=True)
     import sys
 
-    from chapters import ch03, ch04, ch05
+    from chapters import ch03, ch04, ch05, ch06, ch07
 
     chapters = {
         "01_environment": CH1,
@@ -387,6 +387,8 @@ def main() -> None:
         "03_encoder_decoder": ch03.CELLS,
         "04_reward_net_failure": ch04.CELLS,
         "05_joint_training": ch05.CELLS,
+        "06_rnn_lookahead": ch06.CELLS,
+        "07_planner_evaluation": ch07.CELLS,
     }
     wanted = sys.argv[1:] or list(chapters)
     unknown = [w for w in wanted if w not in chapters]
