@@ -19,8 +19,9 @@ $(VENV)/.installed: requirements.txt pyproject.toml
 
 install: $(VENV)/.installed
 
-data: install  ## build the datasets the chapters need, once, with progress bars
+data: install  ## build the dataset and train the models the chapters need, once, with progress bars
 	HUSKY_PROFILE=$(PROFILE) $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
+	HUSKY_PROFILE=$(PROFILE) $(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
 	HUSKY_PROFILE=$(PROFILE) $(VENV)/bin/jupyter-book build . -W -n --keep-going
@@ -31,10 +32,14 @@ lint: install
 
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	HUSKY_PROFILE=quick $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
+	HUSKY_PROFILE=quick $(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	HUSKY_PROFILE=quick $(PY) -m pytest tests notebooks --nbval-lax -p no:cacheprovider
 
-bench: install  ## speed of the fast backend vs PyBullet, side by side
+bench: install  ## speeds measured side by side: collection, decisions, training (full profile)
 	$(PY) benchmarks/bench_collection.py
+	$(PY) benchmarks/bench_decision.py --profile $(PROFILE)
+	$(PY) benchmarks/bench_planners.py
+	$(PY) benchmarks/bench_training.py --profile $(PROFILE)
 
 clean:
 	rm -rf _build

@@ -1,9 +1,10 @@
-"""Command line: ``python -m husky_course {collect,stats,evaluate} ...``.
+"""Command line: ``python -m husky_course {collect,stats,train,evaluate} ...``.
 
 Examples
 --------
 ``python -m husky_course collect --profile full --out artifacts/full/my-dataset --workers 2``
 ``python -m husky_course stats artifacts/full/my-dataset --json``
+``python -m husky_course train all --profile full``
 ``python -m husky_course evaluate --planner heuristic --worlds 500 --seed 0 --json``
 """
 
@@ -54,7 +55,42 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--backend", default="fast", help=f"one of {', '.join(BACKENDS)} (default: fast)")
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    t = sub.add_parser("train", help="train (or load) the chapters' models into the artifact store")
+    t.add_argument("model", choices=(*TRAINABLE, "all"), help="which model ('all': every one, in order)")
+    t.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
+    t.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     return parser
+
+
+#: what ``train`` can build, in the order the chapters need them
+TRAINABLE = ("encoder_decoder", "reward_net", "safety_image", "safety_prim", "joint", "rnn", "distilled")
+
+
+def _train(args: argparse.Namespace) -> dict:
+    """Run the ``train`` subcommand: build or load each model, return its validation loss."""
+    from . import pipelines
+
+    profile = get_profile(args.profile)
+    progress = not args.no_progress
+    builders = {
+        "encoder_decoder": lambda: pipelines.get_encoder_decoder(profile, progress),
+        "reward_net": lambda: pipelines.get_reward_net(profile, progress)[1],
+        "safety_image": lambda: pipelines.get_safety_net(False, profile, progress),
+        "safety_prim": lambda: pipelines.get_safety_net(True, profile, progress),
+        "joint": lambda: pipelines.get_joint(profile, progress),
+        "rnn": lambda: pipelines.get_rnn(profile, progress),
+        "distilled": lambda: pipelines.get_distilled(profile, progress),
+    }
+    out = {}
+    for name in TRAINABLE if args.model == "all" else (args.model,):
+        trained = builders[name]()
+        out[name] = {
+            "best_val_loss": trained.history.best_val,
+            "epochs": len(trained.history.train_loss),
+            "seconds": round(trained.history.seconds, 1),
+            "path": trained.path,
+        }
+    return out
 
 
 def _evaluate(args: argparse.Namespace) -> dict:
@@ -101,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 for key, value in result.items():
                     print(f"{key:28s} {value}")
+        elif args.command == "train":
+            print(json.dumps(_train(args), indent=1))
         elif args.command == "evaluate":
             result = _evaluate(args)
             if args.json:

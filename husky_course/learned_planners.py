@@ -70,9 +70,11 @@ def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str 
     z = model.encoder(_image(obs))
     scores = torch.zeros(N_PRIMITIVES)
     weight = 1.0
-    for _ in range(look_ahead + 1):
+    for i in range(look_ahead + 1):
         if reward == "applied":
             scores += weight * torch.sigmoid(model.safety_logits(z))[0]
+            if i == look_ahead:
+                break  # the latent after the last step would never be scored
             best = int(torch.argmin(scores))
             z = model.encoder.unchecked(model.decoder(z, prims[best : best + 1])[:, None])
         else:

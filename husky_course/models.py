@@ -58,10 +58,11 @@ def check_images(x: Tensor) -> Tensor:
     if not x.dtype.is_floating_point:
         raise ValueError(f"depth images must be floating point in [0, 1], got dtype {x.dtype}")
     if x.numel():
-        if not bool(torch.isfinite(x).all()):
-            raise ValueError("depth images contain NaN or inf values")
-        lo, hi = float(x.min()), float(x.max())
-        if lo < 0.0 or hi > 1.0:
+        lo_t, hi_t = torch.aminmax(x)  # one pass; NaN propagates into both
+        lo, hi = float(lo_t), float(hi_t)
+        if not (lo >= 0.0 and hi <= 1.0):
+            if not bool(torch.isfinite(x).all()):
+                raise ValueError("depth images contain NaN or inf values")
             raise ValueError(f"depth images must be normalised to [0, 1], got values in [{lo:.3g}, {hi:.3g}]")
     return x.float()
 
