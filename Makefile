@@ -24,7 +24,7 @@ data: install  ## build the dataset and train the models the chapters need, once
 	HUSKY_PROFILE=$(PROFILE) $(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
-	HUSKY_PROFILE=$(PROFILE) $(VENV)/bin/jupyter-book build . -W -n --keep-going
+	HUSKY_PROFILE=$(PROFILE) HUSKY_STATIC_WIDGETS=1 $(VENV)/bin/jupyter-book build . -W -n --keep-going
 	@echo "The book is at $(CURDIR)/_build/html/index.html"
 
 lint: install

@@ -136,7 +136,7 @@ class TrainingPlan:
 
     encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     reward_net: TrainConfig = field(
-        default_factory=lambda: TrainConfig(lr=1e-3, batch_size=64, epochs=60, patience=8)
+        default_factory=lambda: TrainConfig(lr=1e-3, batch_size=64, epochs=30, patience=5)
     )
     joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     probe: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30, patience=4))

@@ -173,11 +173,17 @@ if fails:
     plt.show()
     causes = [collision_cause(e, sim) for e in results[best].episodes if e.collided]
     counts = {c: causes.count(c) for c in ("out of view", "in view", "wall")}
+    out_share = counts["out of view"] / max(len(causes), 1)
     display(Markdown(
         f"Of the {len(causes)} collisions of `{best}`, {counts['out of view']} were with an obstacle whose centre "
         f"was outside the camera's 130° field of view when the primitive was chosen, {counts['in view']} with one "
-        f"in view and {counts['wall']} with a side wall. An obstacle out of view cannot be avoided by a planner that "
-        "sees only the current image: memory of earlier images is the missing ingredient."))
+        f"in view and {counts['wall']} with a side wall. " + (
+            "Most were out of view: no planner that sees only the current image could have avoided them, and "
+            "memory of earlier images is the missing ingredient."
+            if out_share > 0.5 else
+            "Most obstacles it hit were in view: the camera saw them and the prediction failed, so better "
+            "prediction (more data, longer training, multi-step supervision) is the first lever; the "
+            f"{counts['out of view']} out-of-view collisions are the share that only memory of earlier images can remove.")))
 """),
     md("""
 ## Explore a primitive yourself
