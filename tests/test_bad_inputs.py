@@ -499,7 +499,8 @@ def test_bad_statistics_inputs():
     "argv, message",
     [
         ([], "required: command"),
-        (["train"], "invalid choice: 'train'"),
+        (["fly"], "invalid choice: 'fly'"),
+        (["train", "everything"], "invalid choice: 'everything'"),
         (["collect", "--videos", "3"], "required: --out"),
         (["collect", "--out", "{tmp}/ds", "--videos", "abc"], "argument --videos: invalid int value: 'abc'"),
         (["evaluate", "--worlds", "3"], "required: --planner"),
