@@ -46,11 +46,15 @@ def main() -> None:
         source = "untrained joint model"
     obs = np.random.default_rng(0).uniform(0, 1, (50, 50)).astype(np.float32)
     print(f"{source}; 25 primitives, look_ahead {args.look_ahead}; torch threads in the block: 1")
+    k, slow_repeats = args.look_ahead, max(args.repeats // 10, 5)
     for reward in ("applied", "next_image"):
         with single_thread():
-            fast = timed(lambda: algorithm1(model, obs, args.look_ahead, reward), args.repeats)
-            slow = timed(lambda: algorithm1_reference(model, obs, args.look_ahead, reward), max(args.repeats // 10, 5))
-        print(f"  reward={reward:10s} batched {fast:7.2f} ms   naive loop {slow:8.2f} ms   speed-up {slow / fast:5.1f}x")
+            fast = timed(lambda r=reward: algorithm1(model, obs, k, r), args.repeats)
+            slow = timed(lambda r=reward: algorithm1_reference(model, obs, k, r), slow_repeats)
+        print(
+            f"  reward={reward:10s} batched {fast:7.2f} ms   naive loop {slow:8.2f} ms"
+            f"   speed-up {slow / fast:5.1f}x"
+        )
 
 
 if __name__ == "__main__":

@@ -100,13 +100,19 @@ def main() -> None:
     z = pipelines.encode(ed.model.encoder, images[torch.from_numpy(rs.val)])
     with torch.no_grad():
         p_paper = rn.model(torch.from_numpy(z))[:, 0].numpy()
-    p_joint = pipelines.collision_probs(joint.model, ds.images[rs.val])[np.arange(len(rs.val)), ds.applied[rs.val]]
+    p_joint = pipelines.collision_probs(joint.model, ds.images[rs.val])[
+        np.arange(len(rs.val)), ds.applied[rs.val]
+    ]
     d = pipelines.safety_data(ds, rs.val)
     with torch.no_grad():
         p_img = torch.sigmoid(img.model.logit(d["image"])).numpy()
         p_prim = torch.sigmoid(prim.model.logit(d["image"], d["prim"])).numpy()
-    for name, p in [("paper reward net", p_paper), ("CNN image only", p_img), ("CNN image+prim", p_prim),
-                    ("joint model", p_joint)]:
+    for name, p in [
+        ("paper reward net", p_paper),
+        ("CNN image only", p_img),
+        ("CNN image+prim", p_prim),
+        ("joint model", p_joint),
+    ]:
         c = classification(y, p)
         print(f"  {name:20s} AUC {c.auc:.3f}  accuracy {c.accuracy:.3f}  majority {c.majority:.3f}  n {c.n}")
     if tmp:
