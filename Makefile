@@ -24,6 +24,11 @@ data: install  ## build the dataset and train the models the chapters need, once
 	HUSKY_PROFILE=$(PROFILE) $(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
+	@# jupyter-book's execution cache knows notebooks, not HUSKY_PROFILE: drop it when the profile changes
+	@if [ -f _build/.profile ] && [ "$$(cat _build/.profile)" != "$(PROFILE)" ]; then \
+		echo "profile changed to $(PROFILE): clearing the execution cache and the built pages"; \
+		rm -rf _build/.jupyter_cache _build/.doctrees _build/html _build/jupyter_execute; fi
+	@mkdir -p _build && echo "$(PROFILE)" > _build/.profile
 	HUSKY_PROFILE=$(PROFILE) HUSKY_STATIC_WIDGETS=1 $(VENV)/bin/jupyter-book build . -W -n --keep-going
 	@echo "The book is at $(CURDIR)/_build/html/index.html"
 
