@@ -67,7 +67,7 @@ def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str 
     """Algorithm 1's final ``prim_scores`` (lower is better), batched over the 25 primitives."""
     model.eval()
     prims = torch.arange(N_PRIMITIVES)
-    z = model.encoder(_image(obs))
+    z = model.encoder.unchecked(_image(obs)[:, None])  # _image has validated the observation
     scores = torch.zeros(N_PRIMITIVES)
     weight = 1.0
     for i in range(look_ahead + 1):

@@ -197,19 +197,26 @@ plt.show()
     code("""
 failing = [r for r in results if r.quality.auc < 0.6 or r.quality.accuracy <= r.quality.majority + 0.02]
 faithful = results[0].quality
+untrained = probe["untrained encoder's latent (15)"]
 lines = [
     f"- A faithful reproduction learns: AUC {faithful.auc:.3f}, accuracy {faithful.accuracy:.1%} "
     f"(majority {faithful.majority:.1%}).",
     f"- Cause 1 (latent lacks depth): the latent explains R² = {probe['frozen latent (15)']:.2f} of the nearest-"
-    f"obstacle distance against {probe['raw image (2,500 pixels)']:.2f} for the raw image. It loses part of the "
-    f"information, and costs AUC ({faithful.auc:.3f} vs {classification(ds.labels[rs.val], p_img).auc:.3f} for the "
-    "same encoder trained end to end), but not enough to make the net fail.",
+    f"obstacle distance against {probe['raw image (2,500 pixels)']:.2f} for the raw image "
+    f"and {untrained:.2f} for an untrained encoder's latent"
+    + (" (training to predict images kept *less* distance than random features do)"
+       if probe["frozen latent (15)"] < untrained else "")
+    + f". The paper's suspicion is right that depth is lost, and it costs AUC ({faithful.auc:.3f} vs "
+    f"{classification(ds.labels[rs.val], p_img).auc:.3f} for the same encoder trained end to end), but not enough "
+    "to make the net fail.",
     f"- Cause 2 (primitive unseen): the exact image-only ceiling is AUC {ceiling['image_only_auc']:.3f}; knowing "
     f"the primitive lifts the end-to-end CNN from {classification(ds.labels[rs.val], p_img).auc:.3f} to "
     f"{classification(ds.labels[rs.val], p_prim).auc:.3f}. A real limit, not a failure.",
     f"- Cause 3 (colliding frames unseen): the decoder's depth error is "
     f"{list(errs.values())[1]['depth error (m)']:.2f} m on colliding frames vs "
-    f"{list(errs.values())[0]['depth error (m)']:.2f} m on trained-on frames.",
+    f"{list(errs.values())[0]['depth error (m)']:.2f} m on trained-on frames: the never-seen frames are "
+    f"{list(errs.values())[1]['depth error (m)'] / list(errs.values())[0]['depth error (m)'] - 1:+.0%} harder, "
+    "a shift in degree, not a blind spot.",
     "- Cause 4 (the pipeline): " + (
         "the slips that reproduce a failure are **" + ", ".join(r.variant.name for r in failing) + "** "
         "(" + "; ".join(f"AUC {r.quality.auc:.3f}, accuracy {r.quality.accuracy:.1%}" for r in failing) + ")."
