@@ -41,11 +41,24 @@ def test_episode_ends_and_counts():
         env.step(25)
 
 
+def _rss_mib() -> float:
+    """Resident memory of this process (MiB), from /proc (Linux)."""
+    for line in open("/proc/self/status"):
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
 def test_thousand_resets_do_not_leak_clients():
     env = HuskyNavEnv(backend="pybullet")
     cid = env.sim.client
+    for seed in range(100):  # warm up allocators and caches before measuring
+        env.reset(seed=seed)
+    before = _rss_mib()
     for seed in range(1000):
         env.reset(seed=seed)
+    growth = _rss_mib() - before
+    assert not growth > 20.0, f"1,000 resets grew resident memory by {growth:.1f} MiB"
     assert env.sim.client == cid and p.isConnected(cid)
     n_bodies = p.getNumBodies(physicsClientId=cid)
     assert n_bodies == 1 + 1 + 2 + 20 + 1  # plane, husky, walls, cylinders, collision proxy

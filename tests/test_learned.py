@@ -125,3 +125,24 @@ def test_survival_labels_agree_with_one_step_outcomes(small_dataset_dir):
     np.testing.assert_array_equal(surv >= 1, safe)  # survives a step iff the primitive is safe
     assert surv.max() <= 2
     np.testing.assert_array_equal(survival_steps_parallel(ds, 2, idx, workers=2, progress=False), surv)
+
+
+def test_exercise_checks(small_dataset_dir):
+    from husky_course import exercises
+    from husky_course.diagnosis import shifted_labels
+    from husky_course.rnn_model import horizon_errors, rnn_predictions
+
+    ds = load_dataset(small_dataset_dir)
+    assert exercises.check_shifted_labels(ds, shifted_labels(ds))
+    with pytest.raises(AssertionError, match="differ"):
+        exercises.check_shifted_labels(ds, ds.labels)  # the un-shifted labels are not the slip
+    torch.manual_seed(0)
+    model = RNNLookahead().eval()
+    n = horizon_errors(lambda i, p: rnn_predictions(model, i, p), ds, np.arange(len(ds)), horizon=4)["n"]
+    assert exercises.check_pairs_per_horizon(ds.lengths, n.astype(int))
+    with pytest.raises(AssertionError):
+        exercises.check_pairs_per_horizon(ds.lengths, n.astype(int) + 1)
+    assert exercises.worlds_for_certificate(0.01) == 299
+    assert exercises.check_worlds_for_certificate(299)
+    with pytest.raises(AssertionError, match="too few"):
+        exercises.check_worlds_for_certificate(298)

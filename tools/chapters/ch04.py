@@ -234,8 +234,8 @@ is still the right design: chapter 5 builds it.
 
 ## Exercises
 
-1. Write the off-by-one slip yourself from `ds.prims` (hint: where is −1?) and check that your
-   labels equal `diagnosis.shifted_labels(ds)`.
+1. Write the off-by-one slip yourself from `ds.prims` (hint: where is −1?) and check your labels
+   with `husky_course.exercises.check_shifted_labels(ds, your_labels)`.
 2. Adam divides each step by a running estimate of the gradient's scale. Use that to explain why
    the "summed loss" variant trains almost exactly like the faithful one. Would plain SGD agree?
 3. The exact image-only ceiling uses *q*, the fraction of primitives that collide. Plot a

@@ -145,7 +145,8 @@ display(Markdown(
    `horizon`). Does the one-step AUC improve when the model has less to predict?
 2. The RNN sees the primitives as learned embeddings. Plot the 25 embeddings after a 2-D PCA. Are
    neighbouring primitives neighbours in the embedding?
-3. Why does the number of image pairs fall with the horizon? Compute it from `ds.lengths` alone
-   and check it against the table.
+3. Why does the number of image pairs fall with the horizon? Compute it from the lengths of the
+   validation videos alone (`ds.lengths[husky_course.dataset.val_videos(ds)]`) and check your
+   numbers with `husky_course.exercises.check_pairs_per_horizon(lengths, your_counts)`.
 """),
 ]

@@ -206,6 +206,7 @@ widgets.primitive_explorer(pipelines.get_joint(profile).model, default_seed=0, d
    primitive. Construct a situation where that picks a primitive whose own best continuation is
    worse than another's. Does the RNN planner, which scores whole sequences, avoid it?
 4. With 0 collisions in *n* worlds, the 95% upper bound is 1 − 0.05^(1/n). How many held-out worlds
-   do you need to certify a collision rate below 1%?
+   do you need to certify a collision rate below 1%? Check with
+   `husky_course.exercises.check_worlds_for_certificate(n)`.
 """),
 ]
