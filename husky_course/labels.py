@@ -83,6 +83,34 @@ def _survival_job(job: tuple) -> tuple[np.ndarray, np.ndarray]:
     return rows, out
 
 
+def survival_at(
+    world_seeds: np.ndarray,
+    poses: np.ndarray,
+    horizon: int,
+    config: SimConfig | None = None,
+    workers: int = 2,
+    progress: bool = True,
+) -> np.ndarray:
+    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose)`` states, in parallel."""
+    import multiprocessing as mp
+
+    if horizon < 1:
+        raise ValueError(f"horizon must be >= 1, got {horizon}")
+    world_seeds = np.asarray(world_seeds)
+    poses = np.asarray(poses, float)
+    order = np.argsort(world_seeds, kind="stable")
+    chunks = np.array_split(order, max(1, len(order) // 400))
+    jobs = [(c, world_seeds[c], poses[c], horizon, config) for c in chunks if len(c)]
+    out = np.zeros((len(poses), 25), np.int8)
+    ctx = mp.get_context("fork")
+    with ctx.Pool(max(1, workers)) as pool:
+        for rows, part in tqdm(
+            pool.imap_unordered(_survival_job, jobs), total=len(jobs), desc="survival labels", disable=not progress
+        ):
+            out[rows] = part
+    return out
+
+
 def survival_steps_parallel(
     ds: Dataset,
     horizon: int,
@@ -91,29 +119,10 @@ def survival_steps_parallel(
     workers: int = 2,
     progress: bool = True,
 ) -> np.ndarray:
-    """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks of videos)."""
-    import multiprocessing as mp
-
-    if horizon < 1:
-        raise ValueError(f"horizon must be >= 1, got {horizon}")
+    """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks)."""
     idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
-    order = np.argsort(ds.episode[idx], kind="stable")
-    chunks = np.array_split(order, max(1, len(order) // 400))
-    jobs = [
-        (c, ds.world_seeds[ds.episode[idx[c]]], np.asarray(ds.poses[idx[c]], float), horizon, config)
-        for c in chunks
-    ]
-    out = np.zeros((len(idx), 25), np.int8)
-    ctx = mp.get_context("fork")
-    with ctx.Pool(max(1, workers)) as pool:
-        for rows, part in tqdm(
-            pool.imap_unordered(_survival_job, jobs),
-            total=len(jobs),
-            desc="survival labels",
-            disable=not progress,
-        ):
-            out[rows] = part
-    return out
+    seeds = ds.world_seeds[ds.episode[idx]]
+    return survival_at(seeds, np.asarray(ds.poses[idx], float), horizon, config, workers, progress)
 
 
 def best_continuations(sim: FastSimulator, pose: np.ndarray, horizon: int) -> np.ndarray:
