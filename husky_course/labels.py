@@ -105,7 +105,10 @@ def survival_at(
     ctx = mp.get_context("fork")
     with ctx.Pool(max(1, workers)) as pool:
         for rows, part in tqdm(
-            pool.imap_unordered(_survival_job, jobs), total=len(jobs), desc="survival labels", disable=not progress
+            pool.imap_unordered(_survival_job, jobs),
+            total=len(jobs),
+            desc="survival labels",
+            disable=not progress,
         ):
             out[rows] = part
     return out
