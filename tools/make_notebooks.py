@@ -113,8 +113,8 @@ sample = rng.choice(len(ds), size=min(len(ds), 600), replace=False)
 fovs = [60, 90, 110, 130, 150]
 vis = hit_visibility(ds.world_seeds[ds.episode[sample]], ds.poses[sample], fovs, cfg)
 fig, ax = plt.subplots(figsize=(5, 3))
-ax.bar([str(f) for f in fovs], [100 * vis[f] for f in fovs], color=["0.6"] * 4 + ["tab:blue"] * 0 + ["0.6"])
-ax.bar([str(cam.fov_deg).rstrip("0").rstrip(".")], [100 * vis[cam.fov_deg]], color="tab:blue")
+ax.bar([str(f) for f in fovs], [100 * vis[f] for f in fovs],
+       color=["tab:blue" if f == cam.fov_deg else "0.6" for f in fovs])  # ours in blue
 ax.set_xlabel("field of view (deg)"); ax.set_ylabel("hit obstacles in view (%)")
 plt.show()
 print(f"With 90 deg the robot sees {vis[90]:.0%} of what its next primitive could hit; "

@@ -205,7 +205,11 @@ widgets.primitive_explorer(pipelines.get_joint(profile).model, default_seed=0, d
 3. Algorithm 1 adds the halved scores of a *single* continuation (the best-so-far) to every
    primitive. Construct a situation where that picks a primitive whose own best continuation is
    worse than another's. Does the RNN planner, which scores whole sequences, avoid it?
-4. With 0 collisions in *n* worlds, the 95% upper bound is 1 − 0.05^(1/n). How many held-out worlds
+4. Does the distilled planner fail because it visits states the random policy never reached?
+   `python benchmarks/exp_dagger.py --profile quick --worlds 300 --eval-worlds 100` runs one round of
+   data aggregation (DAgger): it labels the planner's own states with the simulator and retrains.
+   What does the result say about where the planner's errors come from?
+5. With 0 collisions in *n* worlds, the 95% upper bound is 1 − 0.05^(1/n). How many held-out worlds
    do you need to certify a collision rate below 1%? Check with
    `husky_course.exercises.check_worlds_for_certificate(n)`.
 """),
