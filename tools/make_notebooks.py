@@ -361,7 +361,9 @@ def keep_checked_outputs(nb) -> None:
 
     Checked cells keep their execution count: nbval treats a cell without one as never run.
     """
+    nb.metadata.pop("widgets", None)
     for cell in nb.cells:
+        cell.metadata.pop("execution", None)  # timestamps: they would make every regeneration a diff
         if cell.cell_type == "code" and "NBVAL_CHECK_OUTPUT" not in cell.source:
             cell.outputs = []
             cell.execution_count = None
@@ -376,6 +378,7 @@ def main() -> None:
 
     os.environ["HUSKY_PROFILE"] = "quick"
     os.environ.pop("MPLBACKEND", None)  # the inline backend must draw the figures
+    os.environ["HUSKY_STATIC_WIDGETS"] = "1"  # no live widget state stored in the committed files
     ROOT.mkdir(exist_ok=True)
     import sys
 
