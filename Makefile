@@ -45,6 +45,7 @@ bench: install  ## speeds measured side by side: collection, decisions, training
 	$(PY) benchmarks/bench_decision.py --profile $(PROFILE)
 	$(PY) benchmarks/bench_planners.py
 	$(PY) benchmarks/bench_training.py --profile $(PROFILE)
+	$(PY) benchmarks/bench_pipeline.py --profile $(PROFILE)
 
 clean:
 	rm -rf _build

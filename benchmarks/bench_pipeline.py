@@ -1,0 +1,70 @@
+"""The whole pipeline, stage by stage: collect, train every model, label, evaluate every planner.
+
+Run: ``python benchmarks/bench_pipeline.py [--profile full] [--worlds 500]``.
+
+Everything is built from scratch in a temporary artifact store (nothing is reused), and each
+stage's wall time is printed as it finishes, with the total against the course's target
+(<= 30 min on 2 cores for the full profile). The evaluation uses the profile's held-out worlds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tempfile
+import time
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", default="full")
+    parser.add_argument("--worlds", type=int, default=None, help="evaluation worlds (default: the profile's)")
+    args = parser.parse_args()
+    store = tempfile.mkdtemp(prefix="husky-pipeline-")
+    os.environ["HUSKY_ARTIFACTS"] = store  # before importing the library's resolver users
+
+    from husky_course import pipelines
+    from husky_course.artifacts import get_dataset
+    from husky_course.config import get_profile
+    from husky_course.evaluation import evaluate
+    from husky_course.planning import LEARNED_PLANNERS, make_planner
+
+    profile = get_profile(args.profile)
+    worlds = args.worlds or profile.eval.worlds
+    stages: list[tuple[str, float]] = []
+
+    def stage(name: str, fn) -> object:
+        start = time.perf_counter()
+        out = fn()
+        stages.append((name, time.perf_counter() - start))
+        print(f"  {name:34s} {stages[-1][1]:8.1f} s", flush=True)
+        return out
+
+    print(f"profile {profile.name}, fresh store {store}")
+    try:
+        stage("collect the dataset", lambda: get_dataset(profile, progress=False))
+        stage("train encoder + decoder", lambda: pipelines.get_encoder_decoder(profile, False))
+        stage("train the paper's reward net", lambda: pipelines.get_reward_net(profile, False))
+        stage("train safety CNN (image)", lambda: pipelines.get_safety_net(False, profile, False))
+        stage("train safety CNN (image + prim)", lambda: pipelines.get_safety_net(True, profile, False))
+        stage("train the joint model", lambda: pipelines.get_joint(profile, False))
+        stage("train the RNN look-ahead", lambda: pipelines.get_rnn(profile, False))
+        stage("simulator survival labels", lambda: pipelines.get_survival_labels(profile, False))
+        stage("train the distilled planner", lambda: pipelines.get_distilled(profile, False))
+        for name in ("random", "heuristic", "lookahead", "rnn", "distilled", "oracle"):
+            kwargs = {"look_ahead": 2, "profile": profile.name} if name in LEARNED_PLANNERS else {}
+            planner = make_planner(name, **kwargs)
+            result = stage(
+                f"evaluate {name} ({worlds} worlds)", lambda p=planner: evaluate(p, worlds, progress=False)
+            )
+            print(f"      success {result.success_rate:.3f}", flush=True)  # type: ignore[attr-defined]
+    finally:
+        shutil.rmtree(store, ignore_errors=True)
+    total = sum(t for _, t in stages)
+    target = " (target <= 30 min)" if profile.name == "full" else ""
+    print(f"  {'total':34s} {total:8.1f} s = {total / 60:.1f} min{target}")
+
+
+if __name__ == "__main__":
+    main()
