@@ -2,8 +2,9 @@
 
 Everything in the course is vertical (cylinders and walls standing on flat ground) and the camera
 never pitches or rolls, so the first vertical surface a pixel's ray meets depends only on the
-pixel's *column*. For each column we intersect the horizontal ray with every cylinder (a quadratic)
-and both walls (a line), then per row we keep that hit if it lies below the obstacles' top and in
+pixel's *column*. For each column we intersect the horizontal ray with every obstacle (its
+bounding circle first, then its 20-sided outline, :func:`husky_course.world.obstacle_outline`) and
+both walls (a line), then per row we keep that hit if it lies below the obstacles' top and in
 front of the ground, otherwise the ground (or nothing, i.e. ``far``). This gives the same images as
 PyBullet's TinyRenderer (checked in ``tests/test_fast_vs_pybullet.py``) hundreds of times faster,
 and it is batched over many poses.
@@ -19,20 +20,14 @@ import numpy as np
 from .camera import camera_positions, normalize_depth, pixel_tangents
 from .config import SimConfig
 from .sim import Simulator
-from .world import World
+from .world import World, obstacle_outline
 
 _CHUNK = 512  # poses per vectorised block (bounds memory: chunk x columns x obstacles)
 
-#: TinyRenderer draws a cylinder as a prism over 20 of the 32 points ``r (cos a_k, sin a_k)``,
-#: ``a_k = 2 pi k / 32`` (PyBullet samples 32 rim points, then ``btShapeHull`` keeps these 20).
-#: Measured by rendering a cylinder top-down; ``tests/test_fast_vs_pybullet.py`` re-measures it.
-RENDER_POLYGON_VERTICES = (0, 2, 3, 5, 6, 8, 10, 11, 13, 14, 16, 18, 19, 21, 22, 24, 26, 27, 29, 30)
-
 
 def _polygon_halfplanes() -> tuple[np.ndarray, np.ndarray]:
-    """Outward unit normals ``(E, 2)`` and offsets ``(E,)`` of the unit-radius render polygon."""
-    a = 2 * np.pi * np.array(RENDER_POLYGON_VERTICES) / 32
-    v = np.stack([np.cos(a), np.sin(a)], axis=1)
+    """Outward unit normals ``(E, 2)`` and offsets ``(E,)`` of the unit-radius obstacle outline."""
+    v = obstacle_outline()
     edge = np.roll(v, -1, axis=0) - v
     n = np.stack([edge[:, 1], -edge[:, 0]], axis=1)
     n /= np.linalg.norm(n, axis=1, keepdims=True)

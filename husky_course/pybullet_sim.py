@@ -1,9 +1,16 @@
 """The reference backend: PyBullet in DIRECT mode with its TinyRenderer camera.
 
 The scene holds the ground plane, the Husky from ``pybullet_data``, two side walls and the 20
-cylinders. The Husky is moved kinematically with ``resetBasePositionAndOrientation``. Its collision
-shape for the course is a vertical cylinder of radius ``robot_radius`` (a collision-only body that
-follows the robot during checks and is parked far below the ground otherwise); contact means
+cylinders. Each cylinder's collision shape is PyBullet's exact ``GEOM_CYLINDER``; what the camera
+sees is the 20-sided prism of :func:`husky_course.world.obstacle_outline`, given to TinyRenderer as
+an explicit mesh. PyBullet's own cylinder visual is a convex hull built from the same 20 rim points
+with a 1 mm margin, and its outline changes with height (measured at the camera's height: up to
+8 mm inside the prism for a 0.3 m cylinder), so a silhouette within a few hundredths of a pixel of
+a sample point can land one column off; ``native_cylinders=True`` draws it anyway, for comparison.
+
+The Husky is moved kinematically with ``resetBasePositionAndOrientation``. Its collision shape for
+the course is a vertical cylinder of radius ``robot_radius`` (a collision-only body that follows
+the robot during checks and is parked far below the ground otherwise); contact means
 ``getClosestPoints`` reports a distance <= 0 to an obstacle or a wall.
 """
 
@@ -46,18 +53,47 @@ import pybullet_data  # noqa: E402
 from .camera import camera_positions, linearize_depth_buffer, normalize_depth  # noqa: E402
 from .config import SimConfig  # noqa: E402
 from .sim import Simulator  # noqa: E402
-from .world import World  # noqa: E402
+from .world import World, obstacle_outline  # noqa: E402
 
 _PARK = (0.0, 0.0, -100.0)
 
 
+def prism_mesh(radius: float, height: float) -> tuple[list[list[float]], list[int]]:
+    """Vertices and triangle indices of the obstacle prism, centred on its mid-height.
+
+    The sides are one quad (two triangles) per outline edge; the caps are triangle fans. Faces are
+    wound counter-clockwise seen from outside.
+    """
+    ring = radius * obstacle_outline()
+    m = len(ring)
+    verts = [[x, y, -height / 2] for x, y in ring] + [[x, y, height / 2] for x, y in ring]
+    idx: list[int] = []
+    for k in range(m):
+        a0, a1 = k, (k + 1) % m
+        idx += [a0, a1, a1 + m, a0, a1 + m, a0 + m]
+    for k in range(1, m - 1):
+        idx += [m, m + k, m + k + 1]  # top
+        idx += [0, k + 1, k]  # bottom
+    return verts, idx
+
+
 class PyBulletSimulator(Simulator):
-    """Simulator backed by a private PyBullet DIRECT client (closed by :meth:`close`)."""
+    """Simulator backed by a private PyBullet DIRECT client (closed by :meth:`close`).
+
+    Parameters
+    ----------
+    config : SimConfig, optional
+        World, camera and primitive settings (the defaults if omitted).
+    native_cylinders : bool
+        Draw obstacles with PyBullet's own ``GEOM_CYLINDER`` visual instead of the explicit
+        20-sided prism mesh (see the module docstring). Collisions are the same either way.
+    """
 
     name = "pybullet"
 
-    def __init__(self, config: SimConfig | None = None) -> None:
+    def __init__(self, config: SimConfig | None = None, native_cylinders: bool = False) -> None:
         super().__init__(config)
+        self.native_cylinders = native_cylinders
         with _quiet_c_stdout():  # connect prints the build time
             self.client: int | None = p.connect(p.DIRECT)
         cam = self.config.camera
@@ -92,13 +128,16 @@ class PyBulletSimulator(Simulator):
             bodies.append(p.createMultiBody(0, col, vis, [(x0 + x1) / 2, y, height / 2], physicsClientId=cid))
         for x, y, r in world.obstacles:
             col = p.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=height, physicsClientId=cid)
-            vis = p.createVisualShape(
-                p.GEOM_CYLINDER,
-                radius=r,
-                length=height,
-                rgbaColor=[0.85, 0.45, 0.2, 1],
-                physicsClientId=cid,
-            )
+            colour = [0.85, 0.45, 0.2, 1]
+            if self.native_cylinders:
+                vis = p.createVisualShape(
+                    p.GEOM_CYLINDER, radius=r, length=height, rgbaColor=colour, physicsClientId=cid
+                )
+            else:
+                verts, idx = prism_mesh(r, height)
+                vis = p.createVisualShape(
+                    p.GEOM_MESH, vertices=verts, indices=idx, rgbaColor=colour, physicsClientId=cid
+                )
             bodies.append(p.createMultiBody(0, col, vis, [x, y, height / 2], physicsClientId=cid))
         self._bodies = bodies
         col = p.createCollisionShape(

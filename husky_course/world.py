@@ -39,6 +39,21 @@ class World:
         return self.config.width / 2.0
 
 
+#: Both backends draw a cylinder of radius ``r`` as the prism over the 20 rim points
+#: ``r (cos a_k, sin a_k)``, ``a_k = 2 pi k / 32`` for these ``k``: the outline PyBullet's own
+#: cylinder visual is built from (it samples 32 rim points and ``btShapeHull`` keeps these 20;
+#: ``tests/test_fast_vs_pybullet.py`` re-measures it). PyBullet's hull also adds a 1 mm margin
+#: and slightly different top and bottom outlines, so the PyBullet backend draws this prism as an
+#: explicit mesh instead: then the geometry both backends render is defined here, exactly.
+OUTLINE_VERTICES = (0, 2, 3, 5, 6, 8, 10, 11, 13, 14, 16, 18, 19, 21, 22, 24, 26, 27, 29, 30)
+
+
+def obstacle_outline() -> np.ndarray:
+    """Vertices ``(20, 2)`` of the unit-radius obstacle outline, counter-clockwise."""
+    a = 2 * np.pi * np.array(OUTLINE_VERTICES) / 32
+    return np.stack([np.cos(a), np.sin(a)], axis=1)
+
+
 def check_seed(seed: object) -> int:
     """Return ``seed`` as a non-negative int or raise ``ValueError``."""
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:

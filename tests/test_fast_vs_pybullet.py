@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from husky_course.fast_sim import RENDER_POLYGON_VERTICES, FastSimulator
+from husky_course.fast_sim import FastSimulator
 from husky_course.pybullet_sim import PyBulletSimulator
+from husky_course.world import OUTLINE_VERTICES
 
 
 @pytest.fixture(scope="module")
@@ -28,33 +29,42 @@ def _views(fast, n_worlds=50, per_world=5, seed=0):
         yield world, free
 
 
-def test_depth_agrees_with_pybullet(sims):
-    fast, ref = sims
-    strict, tolerant = [], []
+def _p99_errors(fast, ref) -> np.ndarray:
+    """99th percentile of |fast - PyBullet| for each of the 250 views."""
+    out = []
     for world, poses in _views(fast):
         fast.load(world)
         ref.load(world)
-        a, b = fast.depth(poses), ref.depth(poses)
-        err = np.abs(a - b)
-        strict += list(np.percentile(err.reshape(len(a), -1), 99, axis=1))
-        # the same error, forgiving a silhouette that falls on the other side of a pixel centre:
-        # compare each pixel with the PyBullet pixel or its left/right neighbour
-        shifted = np.stack([np.roll(b, s, axis=2) for s in (-1, 0, 1)])
-        err_t = np.abs(a[None] - shifted).min(0)
-        tolerant += list(np.percentile(err_t.reshape(len(a), -1), 99, axis=1))
-    strict, tolerant = np.array(strict), np.array(tolerant)
-    print(
-        f"views {len(strict)}: strict p99<=0.02 in {np.mean(strict <= 0.02):.1%}, "
-        f"tolerant in {np.mean(tolerant <= 0.02):.1%}; median strict p99 {np.median(strict):.4f}"
-    )
-    assert len(strict) >= 200
-    # Measured here: 90% of views meet p99 <= 0.02 pixel for pixel, 98% when a silhouette may
-    # move by one column. The rest differ by one whole column (an obstacle edge or a one-pixel
-    # gap) whose true silhouette lies within ~0.07 px of TinyRenderer's sample point: the
-    # rasteriser's own rounding, which an analytic ray caster cannot reproduce exactly.
-    assert np.mean(strict <= 0.02) >= 0.85
-    assert np.mean(tolerant <= 0.02) >= 0.95
-    assert np.median(strict) <= 0.005
+        err = np.abs(fast.depth(poses) - ref.depth(poses))
+        out += list(np.percentile(err.reshape(len(poses), -1), 99, axis=1))
+    return np.array(out)
+
+
+def test_depth_agrees_with_pybullet(sims):
+    """The issue's criterion, on every view: p99 of |fast - PyBullet| <= 0.02."""
+    fast, ref = sims
+    p99 = _p99_errors(fast, ref)
+    print(f"views {len(p99)}: worst p99 {p99.max():.2e}, median {np.median(p99):.2e}")
+    assert len(p99) >= 200
+    # measured here: worst 1.4e-05 (float32 rounding of the depth buffer); the prism mesh makes
+    # both backends draw the same geometry, so any silhouette off by one pixel would show up
+    assert p99.max() <= 0.02
+
+
+def test_depth_against_pybullets_native_cylinder():
+    """How close PyBullet's own cylinder visual is (a hull with a 1 mm margin, see pybullet_sim).
+
+    Its silhouette moves by up to ~8 mm with height, so a column whose edge falls within a few
+    hundredths of a pixel of the sample point can differ by one whole column.
+    """
+    fast, ref = FastSimulator(), PyBulletSimulator(native_cylinders=True)
+    try:
+        p99 = _p99_errors(fast, ref)
+    finally:
+        ref.close()
+    print(f"native cylinders: p99 <= 0.02 in {np.mean(p99 <= 0.02):.1%} of {len(p99)} views")
+    assert np.mean(p99 <= 0.02) >= 0.85  # measured: 90.4%
+    assert np.median(p99) <= 0.005
 
 
 def test_collision_labels_identical(sims):
@@ -77,8 +87,8 @@ def test_collision_labels_identical(sims):
     assert n >= 1000 and 0.1 < hits / n < 0.9
 
 
-def test_render_polygon_is_what_pybullet_draws():
-    """Re-measure TinyRenderer's cylinder polygon by rendering one cylinder from above."""
+def test_outline_is_what_pybullet_draws_for_a_cylinder():
+    """Re-measure the rim points PyBullet keeps for a cylinder visual, rendering one from above."""
     import pybullet as p
 
     cid = p.connect(p.DIRECT)
@@ -101,4 +111,4 @@ def test_render_polygon_is_what_pybullet_draws():
         j, i = int(round((x / half + 1) * n / 2)), int(round((1 - y / half) * n / 2))
         if seg[i, j] >= 0:
             kept.append(k)
-    assert tuple(kept) == RENDER_POLYGON_VERTICES
+    assert tuple(kept) == OUTLINE_VERTICES
