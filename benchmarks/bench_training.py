@@ -72,7 +72,7 @@ def main() -> None:
 
     rs = reward_set(ds, seed=profile.data.seed)
     images = pipelines.images_tensor(ds)
-    cfg16 = diagnosis.train_config_for_variants(profile.train.reward_net)
+    cfg16 = profile.train.reward_net
     timed(
         "chapter 4 variants (6 reward nets)",
         lambda: [

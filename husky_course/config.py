@@ -135,8 +135,8 @@ class TrainingPlan:
     """The training runs of the learning chapters, sized per profile."""
 
     encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
-    reward_net: TrainConfig = field(
-        default_factory=lambda: TrainConfig(lr=1e-3, batch_size=64, epochs=30, patience=5)
+    reward_net: TrainConfig = field(  # the paper's lr and batch size (Section 4.2)
+        default_factory=lambda: TrainConfig(lr=1e-3, batch_size=16, epochs=30, patience=5)
     )
     joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=20, patience=3))
     probe: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30, patience=4))
@@ -172,7 +172,7 @@ def _profiles() -> dict[str, Profile]:
             DataConfig(videos=1_000),
             TrainingPlan(
                 encoder_decoder=TrainConfig(epochs=20, patience=3),
-                reward_net=TrainConfig(batch_size=64, epochs=30, patience=5),
+                reward_net=TrainConfig(batch_size=16, epochs=30, patience=5),
                 joint=TrainConfig(epochs=10, patience=3),
                 probe=TrainConfig(epochs=15, patience=3),
                 rnn=TrainConfig(epochs=10, patience=3),

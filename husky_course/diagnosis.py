@@ -16,7 +16,7 @@ Each candidate cause becomes a measurement:
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -216,8 +216,3 @@ def unsafe_frame_errors(model: torch.nn.Module, ds: Dataset, n: int = 400, seed:
 def variant_table(results: list[VariantResult]) -> list[dict]:
     """Rows for a results table, faithful first."""
     return [r.row() for r in results]
-
-
-def train_config_for_variants(cfg: TrainConfig) -> TrainConfig:
-    """The paper's batch size (16) with the profile's epoch cap and patience."""
-    return TrainConfig(**{**asdict(cfg), "batch_size": 16})

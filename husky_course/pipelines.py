@@ -17,7 +17,6 @@ chapters reuse what earlier ones trained. Training is seeded (``torch.manual_see
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from functools import lru_cache
 
 import numpy as np
 import torch
@@ -48,22 +47,17 @@ def dataset_id(ds: Dataset) -> str:
     return config_hash(ds.meta["sha256"])
 
 
-@lru_cache(maxsize=2)
-def _images(path: str, ident: str) -> Tensor:  # cached per dataset; ident makes stale reuse impossible
-    ds = get_dataset_at(path)
-    return torch.from_numpy(np.asarray(ds.images))
-
-
-def get_dataset_at(path: str) -> Dataset:
-    """Load (without re-hashing) a dataset already verified by :func:`get_dataset`."""
-    from .dataset import load_dataset
-
-    return load_dataset(path, verify=False)
+_IMAGES: dict[tuple[str, str], Tensor] = {}  # (path, dataset id) -> images; the last two datasets
 
 
 def images_tensor(ds: Dataset) -> Tensor:
     """All images of ``ds`` as one float16 tensor ``(N, 50, 50)`` (shared, not copied per call)."""
-    return _images(str(ds.path), dataset_id(ds))
+    key = (str(ds.path), dataset_id(ds))
+    if key not in _IMAGES:
+        if len(_IMAGES) >= 2:
+            _IMAGES.pop(next(iter(_IMAGES)))
+        _IMAGES[key] = torch.from_numpy(np.asarray(ds.images))
+    return _IMAGES[key]
 
 
 def _train(
@@ -186,7 +180,7 @@ def get_reward_net(profile: Profile | str | None = None, progress: bool = True) 
         net,
         reward_data(ds, split.train, latents),
         reward_data(ds, split.val, latents),
-        TrainConfig(**{**asdict(cfg), "batch_size": 16}),
+        cfg,
         ds,
         profile,
         progress,

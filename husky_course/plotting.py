@@ -1,6 +1,8 @@
-"""Figures used by the chapters: top-down maps, depth images, the primitive library."""
+"""Figures and tables used by the chapters: top-down maps, depth images, the primitive library."""
 
 from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -142,3 +144,41 @@ def reliability_diagram(bins: dict, ax: Axes | None = None, label: str = "") -> 
     ax.set_ylim(0, 1)
     ax.legend(fontsize=8)
     return ax
+
+
+def markdown_table(
+    rows: Sequence[Mapping[str, object]] | Sequence[Sequence[object]],
+    header: Sequence[str] | None = None,
+    digits: int = 3,
+) -> str:
+    """A Markdown table (display it with ``IPython.display.Markdown``).
+
+    Parameters
+    ----------
+    rows : sequence of mappings or of sequences
+        One entry per row. Mappings give their keys as the header (the first row's, in order).
+    header : sequence of str, optional
+        Column titles; required when the rows are sequences.
+    digits : int
+        Decimals for floats; everything else is shown with ``str``.
+    """
+    if not rows:
+        raise ValueError("markdown_table needs at least one row")
+    if isinstance(rows[0], Mapping):
+        header = list(header or rows[0])
+        cells = [[r.get(c, "") for c in header] for r in rows]  # type: ignore[union-attr]
+    else:
+        if header is None:
+            raise ValueError("markdown_table needs a header when the rows are sequences")
+        header, cells = list(header), [list(r) for r in rows]  # type: ignore[arg-type]
+    if any(len(r) != len(header) for r in cells):
+        raise ValueError(f"every row needs {len(header)} cells, one per column of {header}")
+
+    def fmt(x: object) -> str:
+        if isinstance(x, (float, np.floating)):
+            return f"{x:.{digits}f}"
+        return str(x)
+
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(fmt(x) for x in r) + " |" for r in cells]
+    return "\n".join(lines)

@@ -88,8 +88,7 @@ rows = [("learning rate", "1e-5", cfg.lr), ("batch size", 32, cfg.batch_size),
         ("epochs", "3,200 (stopped by hand)", f"{len(hist.train_loss)} (early stopping, cap {cfg.epochs})"),
         ("wall time", "~12 h", f"{hist.seconds:.0f} s"), ("training pairs", "80% of safe images", len(split.train_t)),
         ("validation pairs", "20%", len(split.val_t))]
-display(Markdown("| setting | paper | this run |\\n|---|---|---|\\n" +
-                 "\\n".join(f"| {a} | {b} | {c} |" for a, b, c in rows)))
+display(Markdown(plotting.markdown_table(rows, header=["setting", "paper", "this run"])))
 """),
     code("""
 fig, ax = plt.subplots(figsize=(6, 3.5))
@@ -139,10 +138,7 @@ table = {
     "model, 20 new worlds": image_errors(pred_fresh, fresh["next"]),
     "copy, 20 new worlds": image_errors(fresh["image"], fresh["next"]),
 }
-cols = list(next(iter(table.values())).row())
-display(Markdown("| | " + " | ".join(cols) + " |\\n|---|" + "---|" * len(cols) + "\\n" +
-                 "\\n".join(f"| {k} | " + " | ".join(f"{x:.3f}" for x in v.row().values()) + " |"
-                            for k, v in table.items())))
+display(Markdown(plotting.markdown_table([{"": k, **v.row()} for k, v in table.items()])))
 m, c = table["model, validation pairs"], table["copy, validation pairs"]
 display(Markdown(
     f"On the validation pairs the model's column IoU is **{m.column_iou:.2f}** (copy: {c.column_iou:.2f}) "

@@ -34,16 +34,11 @@ from husky_course.labels import nearest_obstacle_distance
 from husky_course.metrics import classification
 from husky_course.models import Encoder
 from husky_course import pipelines, diagnosis, plotting
+from husky_course.plotting import markdown_table
 
 profile = get_profile()
 ds = get_dataset(profile)
 rs = reward_set(ds, seed=profile.data.seed)
-
-def table(rows):
-    cols = list(rows[0])
-    fmt = lambda x: f"{x:.3f}" if isinstance(x, float) else str(x)
-    return Markdown("| " + " | ".join(cols) + " |\\n|" + "---|" * len(cols) + "\\n" +
-                    "\\n".join("| " + " | ".join(fmt(r[c]) for c in cols) + " |" for r in rows))
 """),
     md("""
 ## The reward set
@@ -78,7 +73,7 @@ paper_net = classification(ds.labels[rs.val], p_val)
 fig, ax = plt.subplots(figsize=(6, 3.5))
 plotting.plot_curves(rn.history, ax, "Reward net on the frozen latent (the paper's Graphs 2 and 3)")
 plt.show()
-display(table([{"model": "paper's reward net (faithful)", **paper_net.row()}]))
+display(Markdown(markdown_table([{"model": "paper's reward net (faithful)", **paper_net.row()}])))
 fails = paper_net.auc < 0.6 or paper_net.accuracy <= paper_net.majority + 0.02
 display(Markdown(
     f"The faithful reproduction reaches ROC AUC **{paper_net.auc:.3f}** and accuracy **{paper_net.accuracy:.1%}** "
@@ -121,7 +116,7 @@ probe = {
     "frozen latent (15)": diagnosis.probe_r2(latents[tr], dist[tr], latents[va], dist[va], profile.train.probe),
     "untrained encoder's latent (15)": diagnosis.probe_r2(random_latents[tr], dist[tr], random_latents[va], dist[va], profile.train.probe),
 }
-display(table([{"features": k, "R² for nearest-obstacle distance": v} for k, v in probe.items()]))
+display(Markdown(markdown_table([{"features": k, "R² for nearest-obstacle distance": v} for k, v in probe.items()])))
 """),
     md("""
 ## Cause 2: the label depends on the primitive, which the reward net never sees
@@ -148,7 +143,7 @@ rows = [
     {"predictor": "CNN end to end, image + primitive", **{k: v for k, v in classification(ds.labels[rs.val], p_prim).row().items() if k in ("ROC AUC", "accuracy")}},
     {"predictor": "paper's reward net (frozen latent)", "ROC AUC": paper_net.auc, "accuracy": paper_net.accuracy},
 ]
-display(table(rows))
+display(Markdown(markdown_table(rows)))
 """),
     md("""
 ## Cause 3: the encoder never saw a colliding frame
@@ -160,7 +155,7 @@ predictions from them would be worse. From each frame we apply a primitive that 
 """),
     code("""
 errs = diagnosis.unsafe_frame_errors(ed.model, ds, n=300, seed=0)
-display(table([{"frames": k, **v} for k, v in errs.items()]))
+display(Markdown(markdown_table([{"frames": k, **v} for k, v in errs.items()])))
 """),
     md("""
 ## Cause 4: the pipeline itself
@@ -177,10 +172,10 @@ the *true* labels of the validation images:
 - **untrained encoder**: no first pipeline at all.
 """),
     code("""
-cfg16 = diagnosis.train_config_for_variants(profile.train.reward_net)
+cfg16 = profile.train.reward_net  # the paper's batch size, 16
 results = [diagnosis.run_reward_variant(v, ds, rs.train, rs.val, ed.model.encoder, cfg16,
                                         pipelines.images_tensor(ds)) for v in diagnosis.VARIANTS]
-display(table(diagnosis.variant_table(results)))
+display(Markdown(markdown_table(diagnosis.variant_table(results))))
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
 for r in results:
     h = r.history

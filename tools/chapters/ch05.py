@@ -34,15 +34,10 @@ from husky_course.labels import primitive_outcomes
 from husky_course.metrics import classification, image_errors, reliability, roc_auc
 from husky_course.models import JointModel, count_parameters
 from husky_course import pipelines, plotting
+from husky_course.plotting import markdown_table
 
 profile = get_profile()
 ds = get_dataset(profile)
-
-def table(rows):
-    cols = list(rows[0])
-    fmt = lambda x: f"{x:.3f}" if isinstance(x, float) else str(x)
-    return Markdown("| " + " | ".join(cols) + " |\\n|" + "---|" * len(cols) + "\\n" +
-                    "\\n".join("| " + " | ".join(fmt(r[c]) for c in cols) + " |" for r in rows))
 """),
     code("""
 # NBVAL_CHECK_OUTPUT
@@ -92,7 +87,7 @@ y = ds.labels[rs.val]
 rows = [{"model": name, **classification(y, p).row()} for name, p in [
     ("paper's reward net (frozen latent)", p_paper), ("ch. 4: CNN end to end, image only", p_img),
     ("ch. 4: CNN end to end, image + primitive", p_prim), ("joint model (this chapter)", p_joint)]]
-display(table(rows))
+display(Markdown(markdown_table(rows)))
 
 fig, ax = plt.subplots(figsize=(4.5, 4.5))
 plotting.reliability_diagram(reliability(y, p_paper), ax, "paper's reward net")
@@ -140,7 +135,7 @@ true_next = ds.images[split.val_t + 1].astype(np.float32)
 rows = [{"model": name, **image_errors(pipelines.predict_next(m, ds.images[split.val_t], ds.applied[split.val_t]),
                                         true_next).row()} for name, m in [("encoder + decoder (ch. 3)", ed.model),
                                                                           ("joint model", j.model)]]
-display(table(rows))
+display(Markdown(markdown_table(rows)))
 display(Markdown(
     f"Reconstruction BCE {rows[1]['BCE']:.3f} for the joint model against {rows[0]['BCE']:.3f} for chapter 3's: "
     f"the images are {'kept' if rows[1]['BCE'] <= rows[0]['BCE'] * 1.05 else 'somewhat worse'} while the safety "

@@ -48,6 +48,7 @@ from husky_course.evaluation import clopper_pearson, collision_cause, eval_world
 from husky_course.fast_sim import FastSimulator
 from husky_course.planning import make_planner
 from husky_course import pipelines, plotting, widgets
+from husky_course.plotting import markdown_table
 
 profile = get_profile()
 N = profile.eval.worlds
@@ -91,11 +92,12 @@ rows = []
 for name, r in [*results.items(), ("lookahead (literal line 11)", lit)]:
     j = r.to_json()
     lo, hi = j["success_ci95"]
-    rows.append(f"| {name} | {j['success_rate']:.3f} [{lo:.3f}, {hi:.3f}] | {j['mean_prims']:.2f} | "
-                f"{j['collision_rate']:.3f} | {j['collision_rate_upper95']:.3f} | {j['ms_per_decision']:.2f} |")
+    rows.append({"planner": name, "success [95% CI]": f"{j['success_rate']:.3f} [{lo:.3f}, {hi:.3f}]",
+                 "mean primitives": f"{j['mean_prims']:.2f}", "collision rate": j["collision_rate"],
+                 "collision rate, 95% upper bound": j["collision_rate_upper95"],
+                 "ms / decision": f"{j['ms_per_decision']:.2f}"})
 display(Markdown(f"{N} held-out worlds, `look_ahead` = {LOOK_AHEAD} for the learned look-ahead planners.\\n\\n"
-                 "| planner | success [95% CI] | mean primitives | collision rate | collision rate, 95% upper bound | ms / decision |\\n"
-                 "|---|---|---|---|---|---|\\n" + "\\n".join(rows)))
+                 + markdown_table(rows)))
 """),
     code("""
 fig, ax = plt.subplots(figsize=(8, 3.5))
@@ -148,10 +150,11 @@ ax.axhline(results["oracle"].success_rate, color="tab:green", ls="--", lw=1, lab
 ax.axhline(results["heuristic"].success_rate, color="tab:olive", ls=":", lw=1, label="heuristic")
 ax.set_xlabel("look_ahead"); ax.set_ylabel("success rate"); ax.set_xticks(range(5)); ax.legend(fontsize=8)
 plt.show()
-display(Markdown("| look_ahead | " + " | ".join(str(k) for k in sweep) + " |\\n|---|" + "---|" * len(sweep) + "\\n"
-                 "| lookahead success | " + " | ".join(f"{sweep[k].success_rate:.3f}" for k in sweep) + " |\\n"
-                 "| lookahead ms / decision | " + " | ".join(f"{sweep[k].ms_per_decision:.2f}" for k in sweep) + " |\\n"
-                 "| rnn success | " + " | ".join(f"{rnn_sweep[k].success_rate:.3f}" if k in rnn_sweep else "" for k in sweep) + " |"))
+display(Markdown(markdown_table(
+    [["lookahead success", *(sweep[k].success_rate for k in sweep)],
+     ["lookahead ms / decision", *(f"{sweep[k].ms_per_decision:.2f}" for k in sweep)],
+     ["rnn success", *(rnn_sweep[k].success_rate if k in rnn_sweep else "" for k in sweep)]],
+    header=["look_ahead", *map(str, sweep)])))
 """),
     md("""
 ## How the best learned planner fails
