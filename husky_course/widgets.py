@@ -1,14 +1,16 @@
 """Interactive widgets, each with a static fallback.
 
-In a live Jupyter kernel with ipywidgets, :func:`world_explorer` shows a slider; wherever widgets
-cannot run (the built book read offline, CI, ``HUSKY_STATIC_WIDGETS=1``), it draws the same figure
-once at its default value, so the page never shows an empty box.
+Every widget goes through :func:`interactive_figure`: in a live Jupyter kernel with ipywidgets it
+adds sliders and dropdowns that redraw the figure; wherever widgets cannot run (the built book
+read offline, CI, ``HUSKY_STATIC_WIDGETS=1``) it draws the same figure once at the default values,
+so the page never shows an empty box.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -36,6 +38,50 @@ def widgets_live() -> bool:
     return shell is not None and shell.__class__.__name__ == "ZMQInteractiveShell"
 
 
+@dataclass(frozen=True)
+class Control:
+    """One widget control: an integer slider (``options = (min, max)``) or a dropdown (choices)."""
+
+    name: str  #: the keyword argument of the figure function it sets
+    description: str
+    value: int | str  #: the default, also used for the static figure
+    options: tuple
+
+
+def interactive_figure(figure: Callable[..., plt.Figure], rows: list[list[Control]]) -> None:
+    """Show ``figure(**defaults)`` now; in a live kernel, add the controls and redraw on change.
+
+    Offline (the built book, CI) only the static figure appears, so no page shows an empty box.
+    """
+    controls = [c for row in rows for c in row]
+    fig = figure(**{c.name: c.value for c in controls})
+    plt.show()
+    plt.close(fig)
+    if not widgets_live():
+        return
+    import ipywidgets as w
+    from IPython.display import display
+
+    def make(c: Control) -> object:
+        if isinstance(c.value, str):
+            return w.Dropdown(options=list(c.options), value=c.value, description=c.description)
+        return w.IntSlider(value=c.value, min=c.options[0], max=c.options[1], description=c.description)
+
+    made = {c.name: make(c) for c in controls}
+    out = w.Output()
+
+    def redraw(change: dict | None = None) -> None:
+        with out:
+            out.clear_output(wait=True)
+            f = figure(**{name: widget.value for name, widget in made.items()})
+            plt.show()
+            plt.close(f)
+
+    for widget in made.values():
+        widget.observe(redraw, names="value")
+    display(w.VBox([w.HBox([made[c.name] for c in row]) for row in rows] + [out]))
+
+
 def show_world(seed: int = 0, backend: str = "fast", config: SimConfig | None = None) -> plt.Figure:
     """Figure 2 for world ``seed``: RGB view, depth image and map at the start pose."""
     with make_simulator(backend, config) as sim:
@@ -47,26 +93,9 @@ def show_world(seed: int = 0, backend: str = "fast", config: SimConfig | None = 
 
 def world_explorer(default_seed: int = 0, backend: str = "fast") -> None:
     """A world-seed slider around :func:`show_world` (static figure at ``default_seed`` offline)."""
-    fig = show_world(default_seed, backend)
-    plt.show()
-    plt.close(fig)
-    if not widgets_live():
-        return
-    import ipywidgets as w
-    from IPython.display import display
-
-    out = w.Output()
-    slider = w.IntSlider(value=default_seed, min=0, max=999, description="world seed")
-
-    def redraw(change: dict | None = None) -> None:
-        with out:
-            out.clear_output(wait=True)
-            f = show_world(slider.value, backend)
-            plt.show()
-            plt.close(f)
-
-    slider.observe(redraw, names="value")
-    display(w.VBox([slider, out]))
+    interactive_figure(
+        lambda seed: show_world(seed, backend), [[Control("seed", "world seed", default_seed, (0, 999))]]
+    )
 
 
 # --- planning widgets (chapter 7) -------------------------------------------------------------------
@@ -167,30 +196,19 @@ def planner_stepper(
             sim,
         )
 
-    fig = figure(default_seed, default_planner, default_look_ahead, default_step)
-    plt.show()
-    plt.close(fig)
-    if not widgets_live():
-        return
-    import ipywidgets as w
-    from IPython.display import display
-
-    out = w.Output()
-    seed = w.IntSlider(value=default_seed, min=seeds[0], max=seeds[1], description="world")
-    name = w.Dropdown(options=list(planners), value=default_planner, description="planner")
-    look = w.IntSlider(value=default_look_ahead, min=0, max=4, description="look_ahead")
-    step = w.IntSlider(value=default_step, min=0, max=9, description="step")
-
-    def redraw(change: dict | None = None) -> None:
-        with out:
-            out.clear_output(wait=True)
-            f = figure(seed.value, name.value, look.value, step.value)
-            plt.show()
-            plt.close(f)
-
-    for control in (seed, name, look, step):
-        control.observe(redraw, names="value")
-    display(w.VBox([w.HBox([seed, name]), w.HBox([look, step]), out]))
+    interactive_figure(
+        figure,
+        [
+            [
+                Control("seed_index", "world", default_seed, seeds),
+                Control("name", "planner", default_planner, tuple(planners)),
+            ],
+            [
+                Control("look_ahead", "look_ahead", default_look_ahead, (0, 4)),
+                Control("step", "step", default_step, (0, 9)),
+            ],
+        ],
+    )
 
 
 def primitive_explorer(
@@ -216,25 +234,12 @@ def primitive_explorer(
         fig.tight_layout()
         return fig
 
-    fig = figure(default_seed, default_primitive)
-    plt.show()
-    plt.close(fig)
-    if not widgets_live():
-        return
-    import ipywidgets as w
-    from IPython.display import display
-
-    out = w.Output()
-    seed = w.IntSlider(value=default_seed, min=0, max=99, description="world")
-    prim = w.IntSlider(value=default_primitive, min=0, max=24, description="primitive")
-
-    def redraw(change: dict | None = None) -> None:
-        with out:
-            out.clear_output(wait=True)
-            f = figure(seed.value, prim.value)
-            plt.show()
-            plt.close(f)
-
-    for control in (seed, prim):
-        control.observe(redraw, names="value")
-    display(w.VBox([w.HBox([seed, prim]), out]))
+    interactive_figure(
+        figure,
+        [
+            [
+                Control("seed_index", "world", default_seed, (0, 99)),
+                Control("k", "primitive", default_primitive, (0, 24)),
+            ]
+        ],
+    )

@@ -1,4 +1,4 @@
-"""Tables and figures the chapters display."""
+"""Tables, figures and widgets the chapters display."""
 
 from __future__ import annotations
 
@@ -33,3 +33,49 @@ def test_markdown_table_from_sequences_with_header_and_digits():
 def test_markdown_table_bad_input(rows, header, message):
     with pytest.raises(ValueError, match=message):
         markdown_table(rows, header=header)
+
+
+def _recording_figure(calls):
+    import matplotlib.pyplot as plt
+
+    def figure(**kw):
+        calls.append(kw)
+        return plt.figure()
+
+    return figure
+
+
+def test_widget_offline_draws_the_static_figure_once(monkeypatch):
+    from husky_course import widgets
+
+    monkeypatch.setenv("HUSKY_STATIC_WIDGETS", "1")
+    calls = []
+    widgets.interactive_figure(
+        _recording_figure(calls),
+        [[widgets.Control("seed", "world", 3, (0, 9)), widgets.Control("name", "planner", "b", ("a", "b"))]],
+    )
+    assert calls == [{"seed": 3, "name": "b"}]
+
+
+def test_widget_live_redraws_with_the_controls_values(monkeypatch):
+    import IPython.display
+
+    from husky_course import widgets
+
+    monkeypatch.setattr(widgets, "widgets_live", lambda: True)
+    shown = []
+    monkeypatch.setattr(IPython.display, "display", lambda *objs: shown.extend(objs))
+    calls = []
+    widgets.interactive_figure(
+        _recording_figure(calls),
+        [
+            [widgets.Control("seed", "world", 3, (0, 9))],
+            [widgets.Control("name", "planner", "b", ("a", "b"))],
+        ],
+    )
+    (box,) = shown
+    seed, name = box.children[0].children[0], box.children[1].children[0]
+    assert (seed.min, seed.max, name.options) == (0, 9, ("a", "b"))
+    seed.value = 7
+    name.value = "a"
+    assert calls == [{"seed": 3, "name": "b"}, {"seed": 7, "name": "b"}, {"seed": 7, "name": "a"}]
