@@ -24,7 +24,7 @@ def main() -> None:
     store = tempfile.mkdtemp(prefix="husky-pipeline-")
     os.environ["HUSKY_ARTIFACTS"] = store  # before importing the library's resolver users
 
-    from husky_course import pipelines
+    from husky_course import diagnosis, pipelines
     from husky_course.artifacts import get_dataset
     from husky_course.config import get_profile
     from husky_course.evaluation import evaluate
@@ -49,6 +49,7 @@ def main() -> None:
         stage("train safety CNN (image)", lambda: pipelines.get_safety_net(False, profile, False))
         stage("train safety CNN (image + prim)", lambda: pipelines.get_safety_net(True, profile, False))
         stage("train the joint model", lambda: pipelines.get_joint(profile, False))
+        stage("chapter 4's variants and probes", lambda: diagnosis.get_diagnosis(profile, False))
         stage("train the RNN look-ahead", lambda: pipelines.get_rnn(profile, False))
         stage("simulator survival labels", lambda: pipelines.get_survival_labels(profile, False))
         stage("train the distilled planner", lambda: pipelines.get_distilled(profile, False))

@@ -63,7 +63,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: what ``train`` can build, in the order the chapters need them
-TRAINABLE = ("encoder_decoder", "reward_net", "safety_image", "safety_prim", "joint", "rnn", "distilled")
+TRAINABLE = (
+    "encoder_decoder",
+    "reward_net",
+    "safety_image",
+    "safety_prim",
+    "joint",
+    "diagnosis",
+    "rnn",
+    "distilled",
+)
 
 
 def _train(args: argparse.Namespace) -> dict:
@@ -83,6 +92,15 @@ def _train(args: argparse.Namespace) -> dict:
     }
     out = {}
     for name in TRAINABLE if args.model == "all" else (args.model,):
+        if name == "diagnosis":  # chapter 4's variants and probes: many small runs, one JSON
+            from .diagnosis import get_diagnosis
+
+            found = get_diagnosis(profile, progress)
+            out[name] = {
+                "variants": {r.variant.name: r.quality.auc for r in found.variants},
+                "probes": found.probes,
+            }
+            continue
         trained = builders[name]()
         out[name] = {
             "best_val_loss": trained.history.best_val,

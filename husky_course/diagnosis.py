@@ -12,24 +12,31 @@ Each candidate cause becomes a measurement:
 4. *The pipeline itself* -> :class:`RewardVariant` / :func:`run_reward_variant`, the reward net
    re-trained with one plausible slip at a time (labels off by one, softmax fed to a loss that
    expects logits, a summed loss, depth in metres, an untrained encoder).
+
+The trained experiments (the variants and the probes) are built once by :func:`get_diagnosis`,
+which ``python -m husky_course train diagnosis`` (and ``train all``) calls, and cached as JSON in
+the artifact store, so chapter 4 reads them instead of training while it runs.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import Tensor
+from tqdm.auto import tqdm
 
-from .config import TrainConfig
-from .dataset import Dataset
+from .artifacts import get_dataset, model_dir
+from .config import Profile, TrainConfig, config_hash, get_profile
+from .dataset import Dataset, atomic_write_bytes, reward_set
 from .fast_sim import FastSimulator
-from .labels import primitive_outcomes
+from .labels import nearest_obstacle_distance, primitive_outcomes
 from .metrics import Classification, classification, image_errors, roc_auc
 from .models import Encoder, LatentRewardNet, Probe
-from .pipelines import encode, predict_next
+from .pipelines import dataset_id, encode, get_encoder_decoder, images_tensor, predict_next
 from .training import History, fit
 
 
@@ -216,3 +223,79 @@ def unsafe_frame_errors(model: torch.nn.Module, ds: Dataset, n: int = 400, seed:
 def variant_table(results: list[VariantResult]) -> list[dict]:
     """Rows for a results table, faithful first."""
     return [r.row() for r in results]
+
+
+@dataclass
+class Diagnosis:
+    """Chapter 4's trained experiments: the reward-net variants and the probes' R^2."""
+
+    variants: list[VariantResult]
+    probes: dict[str, float]  #: feature set -> R^2 for the nearest obstacle's distance
+
+    def to_dict(self) -> dict:
+        """JSON-ready form."""
+        return {
+            "variants": [
+                {"variant": asdict(r.variant), "history": r.history.to_dict(), "quality": asdict(r.quality)}
+                for r in self.variants
+            ],
+            "probes": self.probes,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Diagnosis:
+        """Inverse of :meth:`to_dict`."""
+        variants = [
+            VariantResult(
+                RewardVariant(**v["variant"]), History.from_dict(v["history"]), Classification(**v["quality"])
+            )
+            for v in data["variants"]
+        ]
+        return cls(variants, {k: float(v) for k, v in data["probes"].items()})
+
+
+def get_diagnosis(profile: Profile | str | None = None, progress: bool = True) -> Diagnosis:
+    """Chapter 4's variants and probes, trained once and cached as ``results.json``.
+
+    The cache is keyed by the dataset, the frozen encoder's checkpoint, both training configs and
+    the list of variants; anything else changing builds a new entry instead of reusing a stale one.
+    """
+    profile = profile if isinstance(profile, Profile) else get_profile(profile)
+    ed = get_encoder_decoder(profile, progress)
+    ds = get_dataset(profile, progress=False)
+    fingerprint = {
+        "dataset": dataset_id(ds),
+        "encoder": config_hash({"path": ed.path, "val": ed.history.best_val}),
+        "reward_net": asdict(profile.train.reward_net),
+        "probe": asdict(profile.train.probe),
+        "variants": [asdict(v) for v in VARIANTS],
+    }
+    path = model_dir("diagnosis", fingerprint, profile) / "results.json"
+    if path.is_file():
+        return Diagnosis.from_dict(json.loads(path.read_text()))
+    rs = reward_set(ds, seed=profile.data.seed)
+    tr, va = rs.train, rs.val
+    images = images_tensor(ds)
+    encoder = ed.model.encoder  # type: ignore[union-attr]
+    bar = tqdm(total=len(VARIANTS) + 3, desc="diagnosis", disable=not progress)
+    latents = encode(encoder, images)
+    dist = nearest_obstacle_distance(ds, config=profile.sim)
+    torch.manual_seed(1)
+    random_latents = encode(Encoder().eval(), images)
+    probes = {}
+    for name, x in (
+        ("raw image (2,500 pixels)", ds.images),
+        ("frozen latent (15)", latents),
+        ("untrained encoder's latent (15)", random_latents),
+    ):
+        probes[name] = probe_r2(x[tr], dist[tr], x[va], dist[va], profile.train.probe)
+        bar.update()
+    variants = []
+    for v in VARIANTS:
+        variants.append(run_reward_variant(v, ds, tr, va, encoder, profile.train.reward_net, images))
+        bar.update()
+    bar.close()
+    result = Diagnosis(variants, probes)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_bytes(path, json.dumps(result.to_dict(), indent=1).encode())
+    return result

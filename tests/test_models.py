@@ -172,3 +172,23 @@ def test_metrics():
     assert e.mae == 0 and e.column_iou == 1.0 and e.depth_error_m == 0
     with pytest.raises(ValueError, match="NaN"):
         roc_auc(y, np.array([0.1, np.nan, 0.2, 0.3]))
+
+
+def test_diagnosis_is_cached_and_round_trips():
+    """Chapter 4's variants and probes: built once (``make test`` trains them up front), then read."""
+    import json
+
+    from husky_course import diagnosis
+
+    first = diagnosis.get_diagnosis("quick", progress=False)
+    assert [r.variant for r in first.variants] == list(diagnosis.VARIANTS)
+    assert set(first.probes) == {
+        "raw image (2,500 pixels)",
+        "frozen latent (15)",
+        "untrained encoder's latent (15)",
+    }
+    again = diagnosis.get_diagnosis("quick", progress=False)  # from results.json: no training
+    assert again.to_dict() == json.loads(json.dumps(first.to_dict()))
+    assert [r.history.seconds for r in again.variants] == [r.history.seconds for r in first.variants]
+    faithful, off_by_one = again.variants[0].quality, again.variants[1].quality
+    assert 0.0 <= off_by_one.auc <= 1.0 and faithful.n == off_by_one.n > 0

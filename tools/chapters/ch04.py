@@ -30,9 +30,7 @@ from IPython.display import Markdown, display
 from husky_course.config import get_profile
 from husky_course.artifacts import get_dataset
 from husky_course.dataset import reward_set
-from husky_course.labels import nearest_obstacle_distance
 from husky_course.metrics import classification
-from husky_course.models import Encoder
 from husky_course import pipelines, diagnosis, plotting
 from husky_course.plotting import markdown_table
 
@@ -107,15 +105,10 @@ of an *untrained* encoder (what random features give for free). R² = 1 is perfe
 than the mean.
 """),
     code("""
-dist = nearest_obstacle_distance(ds, config=profile.sim)
-tr, va = rs.train, rs.val
-torch.manual_seed(1)
-random_latents = pipelines.encode(Encoder().eval(), pipelines.images_tensor(ds))
-probe = {
-    "raw image (2,500 pixels)": diagnosis.probe_r2(ds.images[tr], dist[tr], ds.images[va], dist[va], profile.train.probe),
-    "frozen latent (15)": diagnosis.probe_r2(latents[tr], dist[tr], latents[va], dist[va], profile.train.probe),
-    "untrained encoder's latent (15)": diagnosis.probe_r2(random_latents[tr], dist[tr], random_latents[va], dist[va], profile.train.probe),
-}
+# the probes and chapter 4's reward-net variants are trained once, before the book runs
+# (`python -m husky_course train diagnosis`, part of `train all`); see diagnosis.get_diagnosis
+diag = diagnosis.get_diagnosis(profile)
+probe = diag.probes
 display(Markdown(markdown_table([{"features": k, "R² for nearest-obstacle distance": v} for k, v in probe.items()])))
 """),
     md("""
@@ -172,9 +165,7 @@ the *true* labels of the validation images:
 - **untrained encoder**: no first pipeline at all.
 """),
     code("""
-cfg16 = profile.train.reward_net  # the paper's batch size, 16
-results = [diagnosis.run_reward_variant(v, ds, rs.train, rs.val, ed.model.encoder, cfg16,
-                                        pipelines.images_tensor(ds)) for v in diagnosis.VARIANTS]
+results = diag.variants  # one run per variant, batch 16, seeded: see diagnosis.run_reward_variant
 display(Markdown(markdown_table(diagnosis.variant_table(results))))
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
 for r in results:
