@@ -17,7 +17,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from . import __version__
 from .backends import check_backend, make_simulator
@@ -32,6 +31,7 @@ from .dataset import (
     atomic_write_bytes,
     sha256_file,
 )
+from .progress import tqdm
 from .sim import Simulator
 
 VIDEO_STRIDE = 1_000_000

@@ -27,7 +27,6 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import Tensor
-from tqdm.auto import tqdm
 
 from .artifacts import get_dataset, model_dir
 from .config import Profile, TrainConfig, config_hash, get_profile
@@ -37,6 +36,7 @@ from .labels import nearest_obstacle_distance, primitive_outcomes
 from .metrics import Classification, classification, image_errors, roc_auc
 from .models import Encoder, LatentRewardNet, Probe
 from .pipelines import dataset_id, encode, get_encoder_decoder, images_tensor, predict_next
+from .progress import tqdm
 from .training import History, fit
 
 

@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from .backends import make_simulator
 from .config import EVAL_SEED_BASE
 from .planning import Planner
+from .progress import tqdm
 from .sim import Simulator
 
 EVAL_SET_STRIDE = 1_000_000

@@ -14,11 +14,11 @@ All three group images by world so each world is loaded once.
 from __future__ import annotations
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from .config import SimConfig
 from .dataset import Dataset
 from .fast_sim import FastSimulator
+from .progress import tqdm
 
 
 def _by_world(ds: Dataset, idx: np.ndarray | None) -> tuple[np.ndarray, list[tuple[int, np.ndarray]]]:

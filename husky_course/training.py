@@ -26,10 +26,10 @@ from pathlib import Path
 import numpy as np
 import torch
 from torch import Tensor, nn
-from tqdm.auto import tqdm
 
 from .config import TrainConfig
 from .dataset import atomic_write_bytes
+from .progress import tqdm
 
 CHECKPOINT_FORMAT = 1
 

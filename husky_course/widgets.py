@@ -8,7 +8,6 @@ so the page never shows an empty box.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -21,13 +20,14 @@ from .config import SimConfig
 from .evaluation import Episode, eval_world_seeds, run_episode
 from .fast_sim import FastSimulator
 from .plotting import draw_path, draw_robot, draw_world, figure_two, show_depth
+from .progress import static_mode
 from .sim import Simulator
 from .world import World
 
 
 def widgets_live() -> bool:
     """True when interactive widgets can render (a kernel with ipywidgets, not a static run)."""
-    if os.environ.get("HUSKY_STATIC_WIDGETS") or os.environ.get("CI"):
+    if static_mode():
         return False
     try:
         import ipywidgets  # noqa: F401

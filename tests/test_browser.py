@@ -153,7 +153,7 @@ def book() -> dict:
         shutil.rmtree(OUT, ignore_errors=True)  # library changed: cached executions are stale
     OUT.mkdir(parents=True, exist_ok=True)
     STAMP.write_text(fingerprint)  # the cache holds only executions made under this fingerprint
-    env = {**os.environ, "HUSKY_PROFILE": "quick"}
+    env = {**os.environ, "HUSKY_PROFILE": "quick", "HUSKY_STATIC_WIDGETS": "1"}  # as `make book`
     env.pop("MPLBACKEND", None)  # as in the Makefile: kernels need the inline backend
     cmd = [jupyter_book(), "build", str(REPO), "--path-output", str(OUT), "--all", *BUILD_FLAGS]
     started = time.time()
@@ -261,6 +261,46 @@ def test_every_chapter_renders_in_chromium(book, browser):
         failures += [f"{entry}: {p}" for p in report.problems]
     print(f"{browser.version}; book built in {book['seconds']:.1f} s\n" + "\n".join(lines))
     assert not failures, "\n".join(failures)
+
+
+def unrendered_output(page_html: str) -> list[str]:
+    """What an offline reader of a built page would see broken or raw.
+
+    * a widget view (``application/vnd.jupyter.widget-view+json``): it needs the CDN's JavaScript,
+      so offline it is an empty box (a progress bar left as a widget, a widget without its static
+      figure);
+    * a Markdown table left as text: a paragraph of ``| a | b |`` lines with a ``|---|`` rule.
+    """
+    found = []
+    views = page_html.count("application/vnd.jupyter.widget-view+json")
+    if views:
+        found.append(f"{views} widget view(s), empty without the widgets' JavaScript")
+    for para in re.findall(r"<p>(.*?)</p>", page_html, flags=re.S):
+        text = re.sub(r"<[^>]+>", "", para)
+        if text.lstrip().startswith("|") and re.search(r"\|\s*(-{3}|—)", text):
+            found.append(f"a Markdown table shown as text: {text.strip()[:80]!r}")
+    return found
+
+
+def test_unrendered_output_is_detected():
+    raw = (
+        "<p>| a | b |\n|—|—|\n| 1 | 2 |</p>"
+        '<script type="application/vnd.jupyter.widget-view+json">{}</script>'
+    )
+    assert len(unrendered_output(raw)) == 2
+    assert unrendered_output("<table><tr><td>| a |</td></tr></table><p>a | b</p>") == []
+
+
+def test_no_page_shows_raw_tables_or_empty_widgets(book):
+    """Every displayed table is a real table and no widget is left without its static figure."""
+    problems = [
+        f"{entry}: {p}"
+        for entry in book["entries"]
+        for p in unrendered_output(book["pages"][entry].read_text())
+    ]
+    assert not problems, "\n".join(problems)
+    tables = sum(book["pages"][e].read_text().count("<table") for e in book["entries"])
+    assert tables >= 10, f"only {tables} tables in the whole book: are displayed tables rendered?"
 
 
 def test_index_leads_to_the_first_page(book, browser):

@@ -344,7 +344,7 @@ for c, i in enumerate(rows):
     axes[2, c].set_title("difference", fontsize=9)
 plt.show()
 ref.close()
-print("99th percentile of |fast - PyBullet| per image:", ", ".join(f"{e:.4f}" for e in errs))
+print("99th percentile of |fast - PyBullet| per image:", ", ".join(f"{e:.1e}" for e in errs))
 """),
     md("""
 ## Exercises
