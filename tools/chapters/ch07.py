@@ -202,7 +202,9 @@ widgets.primitive_explorer(pipelines.get_joint(profile).model, default_seed=0, d
 
 1. Run `python -m husky_course evaluate --planner heuristic --worlds 200 --seed 1 --json`, then the
    same with `--planner lookahead --look-ahead 0`. Which one would you deploy, and what does the
-   upper bound on the collision rate add to the success rate?
+   upper bound on the collision rate add to the success rate? With 0 collisions in *n* worlds that
+   bound is 1 − 0.05^(1/n): how many held-out worlds certify a collision rate below 1%? Check with
+   `husky_course.exercises.check_worlds_for_certificate(n)`.
 2. Give the heuristic memory (`make_planner("heuristic", memory=True)`): it remembers where it saw
    obstacles and shifts them as it moves. How much of the gap to the oracle does memory close?
 3. Algorithm 1 adds the halved scores of a *single* continuation (the best-so-far) to every
@@ -212,8 +214,5 @@ widgets.primitive_explorer(pipelines.get_joint(profile).model, default_seed=0, d
    `python benchmarks/exp_dagger.py --profile quick --worlds 300 --eval-worlds 100` runs one round of
    data aggregation (DAgger): it labels the planner's own states with the simulator and retrains.
    What does the result say about where the planner's errors come from?
-5. With 0 collisions in *n* worlds, the 95% upper bound is 1 − 0.05^(1/n). How many held-out worlds
-   do you need to certify a collision rate below 1%? Check with
-   `husky_course.exercises.check_worlds_for_certificate(n)`.
 """),
 ]
