@@ -42,7 +42,6 @@ def main() -> None:
     from husky_course.artifacts import get_dataset
     from husky_course.config import get_profile
     from husky_course.dataset import reward_set
-    from husky_course.labels import nearest_obstacle_distance
     from husky_course.metrics import classification
 
     profile = get_profile(args.profile)
@@ -70,25 +69,14 @@ def main() -> None:
     prim = timed("safety CNN, image + primitive", lambda: pipelines.get_safety_net(True, profile))
     joint = timed("joint model", lambda: pipelines.get_joint(profile))
 
+    start = time.perf_counter()
+    diagnosis.get_diagnosis(profile)  # chapter 4's 6 reward-net variants and 3 probes, one artifact
+    wall = time.perf_counter() - start
+    rows.append(
+        ("chapter 4 variants and probes", wall, "" if wall > 1 else "(already built: --fresh times it)")
+    )
     rs = reward_set(ds, seed=profile.data.seed)
     images = pipelines.images_tensor(ds)
-    cfg16 = profile.train.reward_net
-    timed(
-        "chapter 4 variants (6 reward nets)",
-        lambda: [
-            diagnosis.run_reward_variant(v, ds, rs.train, rs.val, ed.model.encoder, cfg16, images)
-            for v in diagnosis.VARIANTS
-        ],
-    )
-
-    def probes():
-        dist = nearest_obstacle_distance(ds, config=profile.sim)
-        z = pipelines.encode(ed.model.encoder, images)
-        tr, va = rs.train, rs.val
-        diagnosis.probe_r2(ds.images[tr], dist[tr], ds.images[va], dist[va], profile.train.probe)
-        diagnosis.probe_r2(z[tr], dist[tr], z[va], dist[va], profile.train.probe)
-
-    timed("chapter 4 probes", probes)
 
     total = sum(s for name, s, _ in rows[1:])
     print(f"profile {profile.name}: {len(ds)} images, torch threads {torch.get_num_threads()}")

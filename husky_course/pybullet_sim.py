@@ -62,39 +62,28 @@ from .world import World, obstacle_outline  # noqa: E402
 _PARK = (0.0, 0.0, -100.0)
 
 
-def prism_mesh(radius: float, height: float) -> tuple[list[list[float]], list[int]]:
-    """Vertices and triangle indices of the obstacle prism, centred on its mid-height.
-
-    The sides are one quad (two triangles) per outline edge; the caps are triangle fans. Faces are
-    wound counter-clockwise seen from outside.
-    """
-    ring = radius * obstacle_outline()
-    m = len(ring)
-    verts = [[x, y, -height / 2] for x, y in ring] + [[x, y, height / 2] for x, y in ring]
-    idx: list[int] = []
-    for k in range(m):
-        a0, a1 = k, (k + 1) % m
-        idx += [a0, a1, a1 + m, a0, a1 + m, a0 + m]
-    for k in range(1, m - 1):
-        idx += [m, m + k, m + k + 1]  # top
-        idx += [0, k + 1, k]  # bottom
-    return verts, idx
-
-
 @functools.cache
 def unit_prism_obj() -> str:
-    """Path of a Wavefront file holding the unit prism (radius 1, height 1), written once per process.
+    """Path of a Wavefront file holding the unit obstacle prism, written once per process.
 
-    Obstacles load it with ``meshScale = (r, r, height)``. A file, not ``vertices=``: PyBullet
-    keeps every in-memory mesh after ``resetSimulation`` (about 10 kB per obstacle, 190 MiB per
-    1,000 worlds), while a file is read once and shared.
+    The prism has radius 1 and height 1, centred on its mid-height: one quad (two triangles) per
+    edge of :func:`~husky_course.world.obstacle_outline` and triangle-fan caps, wound
+    counter-clockwise seen from outside. Obstacles load it with ``meshScale = (r, r, height)``. A
+    file, not ``vertices=``: PyBullet keeps every in-memory mesh after ``resetSimulation`` (about
+    10 kB per obstacle, 190 MiB per 1,000 worlds), while a file is read once and shared.
     """
+    ring = obstacle_outline()
+    m = len(ring)
+    lines = [f"v {x:.17g} {y:.17g} {z:.17g}" for z in (-0.5, 0.5) for x, y in ring]
+    faces = []  # 1-based vertex numbers: 1..m the bottom ring, m+1..2m the top ring
+    for k in range(m):
+        a0, a1 = k + 1, (k + 1) % m + 1
+        faces += [(a0, a1, a1 + m), (a0, a1 + m, a0 + m)]
+    for k in range(1, m - 1):
+        faces += [(m + 1, m + k + 1, m + k + 2), (1, k + 2, k + 1)]  # top, bottom
+    lines += [f"f {a} {b} {c}" for a, b, c in faces]
     folder = tempfile.mkdtemp(prefix="husky_prism_")
     atexit.register(shutil.rmtree, folder, True)
-    verts, idx = prism_mesh(1.0, 1.0)
-    lines = [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in verts]
-    tris = np.reshape(idx, (-1, 3)) + 1  # .obj indices count from 1
-    lines += [f"f {a} {b} {c}" for a, b, c in tris]
     path = os.path.join(folder, "obstacle_prism.obj")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
