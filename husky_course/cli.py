@@ -2,6 +2,7 @@
 
 Examples
 --------
+``python -m husky_course collect --profile full --workers 2`` (into the artifact store)
 ``python -m husky_course collect --profile full --out artifacts/full/my-dataset --workers 2``
 ``python -m husky_course stats artifacts/full/my-dataset --json``
 ``python -m husky_course train all --profile full``
@@ -13,13 +14,17 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 
-from .backends import BACKENDS, check_backend, make_simulator
-from .collect import collect
 from .config import PROFILES, ConfigError, get_profile
-from .dataset import DatasetError, load_dataset, stats
-from .evaluation import eval_world_seeds, evaluate
-from .planning import LEARNED_PLANNERS, PLANNERS, PlannerError, check_look_ahead, make_planner
+from .data.collect import collect
+from .data.dataset import load_dataset, stats
+from .data.io import DatasetError
+from .data.store import dataset_dir
+from .evaluation.episodes import eval_world_seeds, evaluate
+from .planners.base import PlannerError, check_look_ahead
+from .planners.registry import LEARNED_PLANNERS, PLANNERS, make_planner
+from .sim.backends import BACKENDS, check_backend, make_simulator
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -36,13 +41,19 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--seed", type=int, default=None, help="collection seed (default: the profile's)")
     c.add_argument("--workers", type=int, default=1, help="worker processes (result is the same for any)")
     c.add_argument("--backend", default=None, help=f"one of {', '.join(BACKENDS)} (default: fast)")
-    c.add_argument("--out", required=True, help="output directory")
+    c.add_argument(
+        "--out", default=None, help="output directory (default: the profile's dataset in the artifact store)"
+    )
     c.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     s = sub.add_parser("stats", help="summarise a dataset")
     s.add_argument("dir", help="dataset directory")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     e = sub.add_parser("evaluate", help="evaluate a planner on held-out evaluation worlds")
-    e.add_argument("--planner", required=True, help=f"one of {', '.join(PLANNERS)}")
+    e.add_argument(
+        "--planner",
+        required=True,
+        help=f"one of {', '.join(PLANNERS)}; learned (need `train` first): {', '.join(LEARNED_PLANNERS)}",
+    )
     e.add_argument("--worlds", type=int, default=100, help="number of evaluation worlds (default 100)")
     e.add_argument("--seed", type=int, default=0, help="evaluation set (default 0)")
     e.add_argument(
@@ -77,31 +88,21 @@ TRAINABLE = (
 
 def _train(args: argparse.Namespace) -> dict:
     """Run the ``train`` subcommand: build or load each model, return its validation loss."""
-    from . import pipelines
+    from .course.diagnosis import get_diagnosis
+    from .training.builders import BUILDERS
 
     profile = get_profile(args.profile)
     progress = not args.no_progress
-    builders = {
-        "encoder_decoder": lambda: pipelines.get_encoder_decoder(profile, progress),
-        "reward_net": lambda: pipelines.get_reward_net(profile, progress)[1],
-        "safety_image": lambda: pipelines.get_safety_net(False, profile, progress),
-        "safety_prim": lambda: pipelines.get_safety_net(True, profile, progress),
-        "joint": lambda: pipelines.get_joint(profile, progress),
-        "rnn": lambda: pipelines.get_rnn(profile, progress),
-        "distilled": lambda: pipelines.get_distilled(profile, progress),
-    }
     out = {}
     for name in TRAINABLE if args.model == "all" else (args.model,):
         if name == "diagnosis":  # chapter 4's variants and probes: many small runs, one JSON
-            from .diagnosis import get_diagnosis
-
             found = get_diagnosis(profile, progress)
             out[name] = {
                 "variants": {r.variant.name: r.quality.auc for r in found.variants},
                 "probes": found.probes,
             }
             continue
-        trained = builders[name]()
+        trained = BUILDERS[name](profile, progress)
         out[name] = {
             "best_val_loss": trained.history.best_val,
             "epochs": len(trained.history.train_loss),
@@ -122,8 +123,8 @@ def _evaluate(args: argparse.Namespace) -> dict:
         if not learned:
             raise PlannerError(f"--look-ahead applies only to {', '.join(LEARNED_PLANNERS)}")
         kwargs["look_ahead"] = check_look_ahead(args.look_ahead)
-    if learned and args.profile is not None:
-        kwargs["profile"] = profile.name
+    if learned:
+        kwargs["profile"] = profile
     if args.planner == "heuristic":
         kwargs["config"] = profile.sim
     eval_world_seeds(args.worlds, args.seed)  # validate before building anything
@@ -138,9 +139,18 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         if args.command == "collect":
+            profile = get_profile(args.profile)
+            if args.out is None:  # the store's directory for exactly this spec (its name is the spec's hash)
+                data = replace(
+                    profile.data,
+                    videos=profile.data.videos if args.videos is None else args.videos,
+                    seed=profile.data.seed if args.seed is None else args.seed,
+                    backend=check_backend(args.backend or profile.data.backend),
+                )
+                args.out = dataset_dir(replace(profile, data=data))
             out = collect(
                 args.out,
-                args.profile,
+                profile,
                 videos=args.videos,
                 seed=args.seed,
                 workers=args.workers,

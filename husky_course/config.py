@@ -110,15 +110,18 @@ class DataConfig:
     seed: int = 0
     shard_videos: int = 250  #: videos per shard file (the unit of resumable work)
     backend: str = "fast"
+    val_fraction: float = 0.2  #: share of videos held out for validation (the paper's 80/20)
+    reward_safe_fraction: float = 0.5  #: share of safe images in the reward set (paper, Section 4.2)
 
 
 @dataclass(frozen=True)
 class TrainConfig:
-    """One training run's optimiser settings (see :func:`husky_course.training.fit`).
+    """One training run's optimiser settings (see :func:`husky_course.training.trainer.fit`).
 
     The paper used Adam at lr 1e-5, batch 32, for 3,200 epochs (12 h) on the encoder/decoder and
     lr 1e-3, batch 16, for 2,000 epochs (6 h) on the reward net. On a 2-core CPU we use a larger
-    learning rate and batch and stop early on the validation loss, which converges in minutes.
+    learning rate and batch and stop early on the validation loss (``bench_training.py`` measures
+    how long each run takes).
     """
 
     lr: float = 1e-3
@@ -128,6 +131,34 @@ class TrainConfig:
     min_delta: float = 1e-4  #: an improvement smaller than this does not count
     seed: int = 0
     weight_decay: float = 0.0
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Sizes of the learned models that the paper fixes or that we chose once for every model.
+
+    The image size and the number of primitives are not repeated here: every model reads them
+    from :class:`SimConfig` (``camera.size``, ``primitives.n``) through :func:`model_dims`.
+    """
+
+    latent: int = 15  #: the encoder's latent size (paper, Section 3.4)
+    rnn_horizon: int = 5  #: steps the RNN look-ahead is trained to predict (chapter 6)
+    distill_horizon: int = 3  #: look-ahead of the simulator's survival labels (chapter 7)
+
+
+@dataclass(frozen=True)
+class ModelDims:
+    """The three sizes every network is built from: image side, primitives, latent."""
+
+    image_size: int
+    n_primitives: int
+    latent: int
+
+
+def model_dims(sim: SimConfig | None = None, model: ModelConfig | None = None) -> ModelDims:
+    """The network sizes implied by a simulator config and a model config (defaults: the course's)."""
+    sim, model = sim or SimConfig(), model or ModelConfig()
+    return ModelDims(sim.camera.size, sim.primitives.n, model.latent)
 
 
 @dataclass(frozen=True)
@@ -149,7 +180,7 @@ class EvalPlan:
     """How many held-out worlds the planning chapters evaluate on."""
 
     worlds: int = 500
-    seed: int = 0  #: which held-out set (see :func:`husky_course.evaluation.eval_world_seeds`)
+    seed: int = 0  #: which held-out set (see :func:`husky_course.evaluation.episodes.eval_world_seeds`)
 
 
 @dataclass(frozen=True)
@@ -161,6 +192,12 @@ class Profile:
     data: DataConfig
     train: TrainingPlan = field(default_factory=TrainingPlan)
     eval: EvalPlan = field(default_factory=EvalPlan)
+    model: ModelConfig = field(default_factory=ModelConfig)
+
+    @property
+    def dims(self) -> ModelDims:
+        """Network sizes for this profile (see :func:`model_dims`)."""
+        return model_dims(self.sim, self.model)
 
 
 def _profiles() -> dict[str, Profile]:
@@ -194,6 +231,9 @@ def check_profile_name(name: str) -> str:
 def get_profile(name: str | None = None) -> Profile:
     """The profile ``name``, or the one ``HUSKY_PROFILE`` names (default ``quick``).
 
+    Call it once, where the user chooses (the CLI, the top of a notebook), and pass the returned
+    :class:`Profile` down: no function below takes a profile name.
+
     Parameters
     ----------
     name : str, optional
@@ -223,6 +263,8 @@ __all__ = [
     "ConfigError",
     "DataConfig",
     "EvalPlan",
+    "ModelConfig",
+    "ModelDims",
     "PrimitiveConfig",
     "Profile",
     "SimConfig",
@@ -232,6 +274,7 @@ __all__ = [
     "check_profile_name",
     "config_hash",
     "get_profile",
+    "model_dims",
     "replace",
     "to_dict",
 ]

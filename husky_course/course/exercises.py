@@ -1,0 +1,78 @@
+"""Check functions for the exercises that have one right answer.
+
+Each returns ``True`` and prints a short confirmation when the answer is right, and raises
+``AssertionError`` with a hint when it is not, so a student can call it at the end of a cell.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..data.dataset import Dataset
+
+
+def _ok(message: str) -> bool:
+    print(f"correct: {message}")
+    return True
+
+
+def check_shifted_labels(ds: Dataset, labels: np.ndarray) -> bool:
+    """Chapter 4, exercise 1: the off-by-one labels written from ``ds.prims``.
+
+    The right answer gives image ``t`` the label of image ``t + 1`` of the same video (1 where
+    ``ds.prims[t + 1] == -1``) and 0 to the last image of a video.
+    """
+    from .diagnosis import shifted_labels  # imported here: it pulls in torch
+
+    labels = np.asarray(labels).astype(np.uint8).ravel()
+    want = shifted_labels(ds)
+    if labels.shape != want.shape:
+        raise AssertionError(f"one label per image: expected {want.shape}, got {labels.shape}")
+    wrong = np.flatnonzero(labels != want)
+    if wrong.size:
+        i = int(wrong[0])
+        raise AssertionError(
+            f"{wrong.size} labels differ, first at image {i} "
+            f"(video {int(ds.episode[i])}, step {int(ds.step[i])}): did you stop at the end of each video?"
+        )
+    return _ok(f"{int(want.sum())} images get a collision label one step early")
+
+
+def pairs_per_horizon(lengths: np.ndarray, horizon: int) -> np.ndarray:
+    """Image pairs ``(t, t + h)`` for ``h = 1..horizon`` in videos of the given lengths.
+
+    A video of ``L`` images stores ``L - 1`` safe transitions before its last image, so image
+    ``s`` has a stored successor ``h`` steps ahead exactly when ``s + h <= L - 1``.
+    """
+    lengths = np.asarray(lengths, int)
+    return np.array([int(np.maximum(lengths - h, 0).sum()) for h in range(1, horizon + 1)])
+
+
+def check_pairs_per_horizon(lengths: np.ndarray, counts: list[int] | np.ndarray) -> bool:
+    """Chapter 6, exercise 3: the image pairs at each horizon, from the videos' lengths alone."""
+    want = pairs_per_horizon(lengths, len(counts))
+    got = np.asarray(counts, int)
+    if not np.array_equal(got, want):
+        raise AssertionError(
+            f"expected {want.tolist()}, got {got.tolist()}: an image has a stored successor h steps ahead "
+            "only if it is at least h images before the end of its video"
+        )
+    return _ok(f"pairs per horizon {want.tolist()}")
+
+
+def worlds_for_certificate(rate: float, confidence: float = 0.95) -> int:
+    """Fewest collision-free worlds that certify a collision rate below ``rate`` at ``confidence``."""
+    return math.ceil(math.log(1.0 - confidence) / math.log(1.0 - rate))
+
+
+def check_worlds_for_certificate(n: int, rate: float = 0.01, confidence: float = 0.95) -> bool:
+    """Chapter 7, exercise 4: worlds needed (0 collisions) for a 95% upper bound below ``rate``."""
+    want = worlds_for_certificate(rate, confidence)
+    if int(n) != want:
+        hint = "too few: 1 - 0.05**(1/n) is still above the rate" if n < want else "more than needed"
+        raise AssertionError(f"{n} is {hint}")
+    return _ok(
+        f"{want} worlds without a collision certify a rate below {rate:.0%} with {confidence:.0%} confidence"
+    )

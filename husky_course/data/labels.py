@@ -1,0 +1,153 @@
+"""Ground truth about dataset images, asked of the simulator (used to diagnose and supervise models).
+
+The dataset records what happened to *one* primitive per image. The simulator can tell us more,
+because every image carries its world seed and pose:
+
+* :func:`primitive_outcomes` -- whether each of the 25 primitives would collide from there;
+* :func:`survival_steps` -- for each primitive, how many steps the best continuation that starts
+  with it stays collision-free (the oracle's own lattice search,
+  :mod:`husky_course.sim.lattice`, used to distil it into a network);
+* :func:`nearest_obstacle_distance` -- the distance (m) to the nearest obstacle in view.
+
+All three group images by world so each world is loaded once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import SimConfig
+from ..progress import tqdm
+from ..sim.fast import FastSimulator
+from ..sim.lattice import expand, survival
+from .dataset import Dataset
+
+
+def _by_world(ds: Dataset, idx: np.ndarray | None) -> tuple[np.ndarray, list[tuple[int, np.ndarray]]]:
+    idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
+    video = ds.episode[idx]
+    groups = []
+    for v in np.unique(video):
+        groups.append((int(ds.world_seeds[v]), np.flatnonzero(video == v)))
+    return idx, groups
+
+
+def primitive_outcomes(
+    ds: Dataset, idx: np.ndarray | None = None, config: SimConfig | None = None, progress: bool = False
+) -> np.ndarray:
+    """Collision flag of every primitive from every image's pose, ``(len(idx), 25)`` bool."""
+    sim = FastSimulator(config)
+    idx, groups = _by_world(ds, idx)
+    out = np.zeros((len(idx), sim.library.n), bool)
+    ks = np.arange(sim.library.n)
+    for seed, rows in tqdm(groups, desc="outcomes", disable=not progress, leave=False):
+        sim.load(seed)
+        poses = np.asarray(ds.poses[idx[rows]], float)
+        paths = sim.library.paths_from(np.repeat(poses, len(ks), 0), np.tile(ks, len(poses)))
+        out[rows] = sim.contacts(paths).any(1).reshape(len(poses), len(ks))
+    return out
+
+
+def survival_steps(
+    ds: Dataset,
+    horizon: int,
+    idx: np.ndarray | None = None,
+    config: SimConfig | None = None,
+    progress: bool = False,
+) -> np.ndarray:
+    """Steps (0..``horizon``) the best continuation starting with each primitive survives, ``(n, 25)``.
+
+    The search is the oracle's exact lattice search (:func:`best_continuations`).
+    """
+    if horizon < 1:
+        raise ValueError(f"horizon must be >= 1, got {horizon}")
+    sim = FastSimulator(config)
+    lib = sim.library
+    idx, groups = _by_world(ds, idx)
+    out = np.zeros((len(idx), lib.n), np.int8)
+    for seed, rows in tqdm(groups, desc="survival", disable=not progress, leave=False):
+        sim.load(seed)
+        for r in rows:
+            out[r] = best_continuations(sim, np.asarray(ds.poses[idx[r]], float), horizon)
+    return out
+
+
+def _survival_job(job: tuple) -> tuple[np.ndarray, np.ndarray]:
+    rows, seeds, poses, horizon, config = job
+    sim = FastSimulator(config)
+    out = np.zeros((len(rows), sim.library.n), np.int8)
+    for j, (seed, pose) in enumerate(zip(seeds, poses, strict=True)):
+        if sim.world is None or sim.world.seed != seed:
+            sim.load(int(seed))
+        out[j] = best_continuations(sim, pose, horizon)
+    return rows, out
+
+
+def survival_at(
+    world_seeds: np.ndarray,
+    poses: np.ndarray,
+    horizon: int,
+    config: SimConfig | None = None,
+    workers: int = 2,
+    progress: bool = True,
+) -> np.ndarray:
+    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose)`` states, in parallel."""
+    import multiprocessing as mp
+
+    if horizon < 1:
+        raise ValueError(f"horizon must be >= 1, got {horizon}")
+    world_seeds = np.asarray(world_seeds)
+    poses = np.asarray(poses, float)
+    order = np.argsort(world_seeds, kind="stable")
+    chunks = np.array_split(order, max(1, len(order) // 400))
+    jobs = [(c, world_seeds[c], poses[c], horizon, config) for c in chunks if len(c)]
+    out = np.zeros((len(poses), (config or SimConfig()).primitives.n), np.int8)
+    ctx = mp.get_context()  # the platform's default start method
+    with ctx.Pool(max(1, workers)) as pool:
+        for rows, part in tqdm(
+            pool.imap_unordered(_survival_job, jobs),
+            total=len(jobs),
+            desc="survival labels",
+            disable=not progress,
+        ):
+            out[rows] = part
+    return out
+
+
+def survival_steps_parallel(
+    ds: Dataset,
+    horizon: int,
+    idx: np.ndarray | None = None,
+    config: SimConfig | None = None,
+    workers: int = 2,
+    progress: bool = True,
+) -> np.ndarray:
+    """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks)."""
+    idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
+    seeds = ds.world_seeds[ds.episode[idx]]
+    return survival_at(seeds, np.asarray(ds.poses[idx], float), horizon, config, workers, progress)
+
+
+def best_continuations(sim: FastSimulator, pose: np.ndarray, horizon: int) -> np.ndarray:
+    """For each first primitive, the most steps (<= ``horizon``) a sequence starting with it survives.
+
+    One lattice expansion from ``pose`` (:func:`husky_course.sim.lattice.expand`, clearance not
+    needed: ``cap = 0``) read backwards by :func:`husky_course.sim.lattice.survival`.
+    """
+    world = sim._require_world()
+    return survival(expand(world, sim.library, np.asarray(pose, float), horizon, cap=0.0))
+
+
+def nearest_obstacle_distance(
+    ds: Dataset, idx: np.ndarray | None = None, config: SimConfig | None = None
+) -> np.ndarray:
+    """Depth (m, along the view axis) of the nearest obstacle in each image, capped at ``far``."""
+    sim = FastSimulator(config)
+    far = sim.config.camera.far
+    idx, groups = _by_world(ds, idx)
+    out = np.full(len(idx), far)
+    for seed, rows in groups:
+        sim.load(seed)
+        t, kind = sim.column_hits(np.asarray(ds.poses[idx[rows]], float))
+        out[rows] = np.minimum(np.where(kind >= 2, t, np.inf).min(1), far)
+    return out

@@ -1,0 +1,234 @@
+"""Evaluate a planner on held-out worlds: success rate, primitives survived, exact error bars.
+
+Evaluation worlds have seeds at or above :data:`~husky_course.config.EVAL_SEED_BASE` (``2**31``);
+data collection only produces seeds below it and refuses any other
+(:func:`husky_course.data.collect.world_seed_for`), so no training world is ever an evaluation world.
+Evaluation set ``s`` of size ``n`` is the worlds ``EVAL_SEED_BASE + s * 1_000_000 + [0, n)``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..checks import check_int, is_int
+from ..config import EVAL_SEED_BASE
+from ..planners.base import Planner
+from ..progress import tqdm
+from ..sim.backends import make_simulator
+from ..sim.base import Simulator
+from .statistics import clopper_pearson
+
+EVAL_SET_STRIDE = 1_000_000
+#: Evaluation set seeds are ``0 .. EVAL_SET_MAX`` (so every evaluation world seed is below 2**32).
+EVAL_SET_MAX = EVAL_SEED_BASE // EVAL_SET_STRIDE - 1
+
+
+def eval_world_seeds(n: int, seed: int = 0) -> np.ndarray:
+    """World seeds ``(n,)`` int64 of evaluation set ``seed``: ``EVAL_SEED_BASE + seed * 10**6 + [0, n)``."""
+    n = check_int(n, "the number of evaluation worlds", 1, EVAL_SET_STRIDE)
+    seed = check_int(seed, "the evaluation seed", 0, EVAL_SET_MAX)
+    return EVAL_SEED_BASE + seed * EVAL_SET_STRIDE + np.arange(n, dtype=np.int64)
+
+
+def is_eval_seed(world_seed: object) -> bool:
+    """Whether ``world_seed`` is reserved for evaluation (an integer >= ``EVAL_SEED_BASE``)."""
+    if not is_int(world_seed):
+        return False
+    return int(world_seed) >= EVAL_SEED_BASE
+
+
+@dataclass
+class Episode:
+    """One planner run in one world.
+
+    Attributes
+    ----------
+    actions : list of int
+        Primitives applied, the colliding one included.
+    poses : ndarray, shape (len(actions) + 1, 3)
+        Pose before each primitive, then the final pose (last safe pose before contact if collided).
+    path : ndarray, shape (m, 3)
+        Every recorded pose played back, concatenated.
+    n_prims : int
+        ``len(actions)``, the colliding primitive counted (the dataset's convention).
+    success : bool
+        ``max_primitives`` primitives applied without collision (10 cross the course).
+    decision_times : list of float
+        Seconds spent in ``planner.act`` per step.
+    reset_time : float
+        Seconds spent in ``planner.reset`` (where the oracle plans).
+    observations, scores : list
+        Filled only by ``run_episode(..., record=True)``.
+    """
+
+    world_seed: int
+    actions: list[int]
+    poses: np.ndarray
+    path: np.ndarray
+    collided: bool
+    n_prims: int
+    success: bool
+    decision_times: list[float]
+    reset_time: float = 0.0
+    observations: list[np.ndarray] = field(default_factory=list)  #: with ``record=True``: image per step
+    scores: list[np.ndarray | None] = field(default_factory=list)  #: with ``record=True``: planner scores
+
+
+def run_episode(
+    planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = 10, record: bool = False
+) -> Episode:
+    """Run ``planner`` in world ``world_seed`` until a collision or ``max_primitives`` primitives.
+
+    With ``record`` the episode also keeps every observation and the planner's ``last_scores``
+    (for step-by-step figures and widgets).
+    """
+    max_primitives = check_int(max_primitives, "max_primitives", 1, 10**6)
+    world = sim.load(int(world_seed))
+    pose = world.start.copy()
+    t0 = time.perf_counter()
+    planner.reset(sim, pose.copy())
+    reset_time = time.perf_counter() - t0
+    obs = sim.depth(pose[None])[0]
+    actions: list[int] = []
+    poses, paths, times = [pose], [pose[None]], []
+    collided = False
+    observations: list[np.ndarray] = []
+    scores: list[np.ndarray | None] = []
+    for _ in range(max_primitives):
+        t0 = time.perf_counter()
+        action = planner.act(obs, pose.copy())
+        times.append(time.perf_counter() - t0)
+        if record:
+            observations.append(obs)
+            scores.append(None if planner.last_scores is None else np.array(planner.last_scores))
+        action = sim.library.check_index(action)
+        result = sim.apply(pose, action)
+        actions.append(action)
+        paths.append(result.path)
+        pose = result.pose
+        poses.append(pose)
+        collided = result.collided
+        obs = None if collided else sim.depth(pose[None])[0]
+        planner.observe(action, obs)
+        if collided:
+            break
+    return Episode(
+        world_seed=int(world_seed),
+        actions=actions,
+        poses=np.asarray(poses),
+        path=np.concatenate(paths),
+        collided=collided,
+        n_prims=len(actions),
+        success=not collided and len(actions) == max_primitives,
+        decision_times=times,
+        reset_time=reset_time,
+        observations=observations,
+        scores=scores,
+    )
+
+
+@dataclass
+class EvalResult:
+    """Summary of :func:`evaluate` (``episodes`` is kept for plots but left out of :meth:`to_json`).
+
+    Attributes
+    ----------
+    success_rate, collision_rate : float
+        Fractions of worlds crossed (``max_primitives`` safe primitives) and ended by a collision.
+    mean_prims : float
+        Mean primitives applied per world, the colliding one counted (random policy: about 4.4).
+    collision_rate_upper95 : float
+        Exact one-sided 95% upper bound on the collision probability (Clopper-Pearson).
+    success_ci95 : (float, float)
+        Exact two-sided 95% interval on the success probability.
+    ms_per_decision, ms_per_reset : float
+        Mean wall time of ``planner.act`` and of ``planner.reset`` (the oracle plans in ``reset``).
+    crossable_rate : float or None
+        Fraction of worlds the planner reported crossable (the oracle), else ``None``.
+    """
+
+    planner: str
+    worlds: int
+    seed: int
+    max_primitives: int
+    success_rate: float
+    mean_prims: float
+    collision_rate: float
+    collision_rate_upper95: float
+    success_ci95: tuple[float, float]
+    ms_per_decision: float
+    ms_per_reset: float
+    crossable_rate: float | None = None
+    episodes: list[Episode] = field(default_factory=list, repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-ready dict of every field but ``episodes`` (``crossable_rate`` only when known)."""
+        out = {
+            "planner": self.planner,
+            "worlds": self.worlds,
+            "seed": self.seed,
+            "max_primitives": self.max_primitives,
+            "success_rate": self.success_rate,
+            "mean_prims": self.mean_prims,
+            "collision_rate": self.collision_rate,
+            "collision_rate_upper95": self.collision_rate_upper95,
+            "success_ci95": list(self.success_ci95),
+            "ms_per_decision": self.ms_per_decision,
+            "ms_per_reset": self.ms_per_reset,
+        }
+        if self.crossable_rate is not None:
+            out["crossable_rate"] = self.crossable_rate
+        return out
+
+
+def evaluate(
+    planner: Planner,
+    worlds: int,
+    seed: int = 0,
+    sim: Simulator | None = None,
+    progress: bool = True,
+    max_primitives: int | None = None,
+) -> EvalResult:
+    """Run ``planner`` on evaluation set ``seed`` (``worlds`` worlds) and summarise.
+
+    ``sim`` defaults to a new fast simulator (closed afterwards); ``max_primitives`` to the
+    simulator's config (10). ``crossable_rate`` is filled in when the planner reports
+    ``crossable`` (the oracle).
+    """
+    seeds = eval_world_seeds(worlds, seed)
+    own = sim is None
+    sim = make_simulator("fast") if sim is None else sim
+    limit = sim.config.max_primitives if max_primitives is None else max_primitives
+    episodes: list[Episode] = []
+    crossable: list[bool] = []
+    try:
+        for world_seed in tqdm(seeds, desc=f"evaluate {planner.name}", unit="world", disable=not progress):
+            episodes.append(run_episode(planner, sim, int(world_seed), limit))
+            if hasattr(planner, "crossable"):
+                crossable.append(bool(planner.crossable))
+    finally:
+        if own:
+            sim.close()
+    n = len(episodes)
+    successes = sum(e.success for e in episodes)
+    collisions = sum(e.collided for e in episodes)
+    times = [t for e in episodes for t in e.decision_times]
+    return EvalResult(
+        planner=planner.name,
+        worlds=n,
+        seed=int(seed),
+        max_primitives=int(limit),
+        success_rate=successes / n,
+        mean_prims=float(np.mean([e.n_prims for e in episodes])),
+        collision_rate=collisions / n,
+        collision_rate_upper95=clopper_pearson(collisions, n, 0.95, "upper")[1],
+        success_ci95=clopper_pearson(successes, n, 0.95),
+        ms_per_decision=1e3 * float(np.mean(times)) if times else 0.0,
+        ms_per_reset=1e3 * float(np.mean([e.reset_time for e in episodes])),
+        crossable_rate=float(np.mean(crossable)) if crossable else None,
+        episodes=episodes,
+    )

@@ -1,0 +1,3 @@
+"""Stage 5, the planners: ``base`` (the protocol) -> ``classic`` (random, heuristic), ``oracle``
+(exact search on the true simulator), ``learned`` (Algorithm 1, RNN shooting, the distilled oracle)
+-> ``registry`` (any planner by name)."""

@@ -1,0 +1,97 @@
+"""The simulator interface that both backends implement.
+
+A simulator holds one :class:`~husky_course.sim.world.World` at a time and answers two questions:
+what does the onboard camera see from a pose (:meth:`Simulator.depth`), and does playing a
+primitive back from a pose touch an obstacle (:meth:`Simulator.apply`). The primitive library,
+the playback and the collision rule live here, so the backends differ only in geometry queries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config import SimConfig
+from .primitives import PrimitiveLibrary, make_library
+from .world import World, make_world
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Outcome of playing one primitive back.
+
+    Attributes
+    ----------
+    collided : bool
+        Whether the robot's collision cylinder touched an obstacle or wall along the path.
+    pose : ndarray, shape (3,)
+        Where the robot ends: the primitive's end pose if safe, otherwise the last recorded pose
+        before the first contact.
+    path : ndarray, shape (samples, 3)
+        The recorded poses that were played back.
+    """
+
+    collided: bool
+    pose: np.ndarray
+    path: np.ndarray
+
+
+class Simulator:
+    """Base class: primitive playback and the collision rule. Backends fill in the geometry."""
+
+    name = "base"
+
+    def __init__(self, config: SimConfig | None = None) -> None:
+        self.config = config or SimConfig()
+        self.library: PrimitiveLibrary = make_library(self.config.primitives)
+        self.world: World | None = None
+
+    # --- world -------------------------------------------------------------------------------
+    def load(self, world: World | int) -> World:
+        """Load ``world`` (or the world of an integer seed) and return it."""
+        if not isinstance(world, World):
+            world = make_world(world, self.config.world)
+        self.world = world
+        self._load(world)
+        return world
+
+    def _require_world(self) -> World:
+        if self.world is None:
+            raise RuntimeError("no world loaded: call load(world_or_seed) first")
+        return self.world
+
+    # --- queries backends implement ------------------------------------------------------------
+    def _load(self, world: World) -> None:
+        raise NotImplementedError
+
+    def depth(self, poses: np.ndarray) -> np.ndarray:
+        """Normalised depth images ``(B, size, size)`` float32 in [0, 1] for robot poses ``(B, 3)``."""
+        raise NotImplementedError
+
+    def rgb(self, pose: np.ndarray) -> np.ndarray:
+        """An RGB view ``(size, size, 3)`` uint8 from the onboard camera, for display."""
+        raise NotImplementedError
+
+    def contact_along(self, path: np.ndarray) -> int:
+        """Index of the first pose of ``path (S, 3)`` whose collision cylinder touches, or -1."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Release backend resources (safe to call twice)."""
+
+    # --- shared logic --------------------------------------------------------------------------
+    def apply(self, pose: np.ndarray, index: int) -> StepResult:
+        """Play primitive ``index`` back from ``pose`` and check it against the loaded world."""
+        self._require_world()
+        path = self.library.path_from(pose, index)
+        hit = self.contact_along(path)
+        if hit < 0:
+            return StepResult(False, path[-1].copy(), path)
+        return StepResult(True, path[max(hit - 1, 0)].copy(), path)
+
+    def __enter__(self) -> Simulator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

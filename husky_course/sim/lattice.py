@@ -1,0 +1,188 @@
+"""The exact search over primitive sequences that both the oracle and the survival labels use.
+
+Every primitive advances the same distance and ends at the heading it started with, and the
+lateral offsets are evenly spaced (spacing ``h``). So from a start pose with yaw 0 the pose after
+``k`` primitives is ``(x0 + k advance, y0 + k o_0 + J h, 0)`` for an integer ``J``: the reachable
+states form a lattice in ``(k, J)``, at most ``k (n - 1) + 1`` wide at depth ``k`` instead of
+``n**k`` sequences.
+
+:func:`expand` walks that lattice forward once, checking every edge (a primitive from a state)
+for contact with the simulator's rule (robot disc against obstacle discs and side walls, at the
+primitive's recorded samples) and measuring its clearance. Two backward passes read it:
+
+* :func:`survival` -- for each first primitive, the most steps (``<= horizon``) a sequence that
+  starts with it stays collision-free: the labels the distilled planner learns;
+* :func:`rank_plans` -- the oracle's lexicographic ranking of whole plans (safe steps, then the
+  plan's smallest clearance binned to ``quantum``, then the least lateral motion).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .primitives import PrimitiveLibrary
+from .world import World
+
+
+class LatticeError(ValueError):
+    """A start pose or primitive library the lattice search cannot handle."""
+
+
+@dataclass
+class Lattice:
+    """The reachable lattice from one start pose, expanded ``horizon`` steps.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (3,)
+        The start pose.
+    states : list of ndarray
+        ``states[k]`` holds the lattice indices ``J`` reachable after ``k`` safe primitives
+        (``horizon + 1`` entries; ``states[0] == [0]``).
+    feasible : list of ndarray
+        ``feasible[k][row, m]``: primitive ``m`` from state ``states[k][row]`` is collision-free.
+    clear : list of ndarray
+        The edge's clearance (m): smallest gap between the robot disc and any obstacle or wall
+        along it (obstacles further than ``cap`` beyond contact are not measured).
+    nxt : list of ndarray
+        ``nxt[k][row, m]``: the row in ``states[k + 1]`` that the edge leads to (clipped where
+        the edge is infeasible).
+    """
+
+    pose: np.ndarray
+    states: list[np.ndarray]
+    feasible: list[np.ndarray]
+    clear: list[np.ndarray]
+    nxt: list[np.ndarray]
+
+    @property
+    def horizon(self) -> int:
+        """Number of expanded steps."""
+        return len(self.feasible)
+
+
+def lattice_step(library: PrimitiveLibrary) -> tuple[float, float]:
+    """``(advance, h)``: the library's common advance and offset spacing, or :class:`LatticeError`."""
+    local, offsets, n = library.local_paths, library.offsets, library.n
+    h = float(offsets[1] - offsets[0]) if n > 1 else 1.0
+    ends = local[:, -1]
+    evenly = n == 1 or np.allclose(np.diff(offsets), h, rtol=0, atol=1e-9)
+    level = np.allclose(ends[:, 2], 0, atol=1e-9)
+    if not (evenly and level and np.allclose(ends[:, 0], ends[0, 0], atol=1e-12)):
+        raise LatticeError("the lattice search needs evenly spaced primitives that end at heading 0")
+    return float(ends[0, 0]), h
+
+
+def expand(world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, cap: float) -> Lattice:
+    """Expand the lattice from ``pose`` for ``horizon`` steps (see the module docstring).
+
+    ``cap`` (m) bounds the clearance that is measured: obstacles further than ``cap`` beyond
+    contact are skipped, so clearances above ``cap`` are lower bounds, which is all a ranking
+    that caps clearance needs.
+    """
+    pose = np.asarray(pose, float)
+    if abs(pose[2]) >= 1e-9:
+        raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]}")
+    adv, h = lattice_step(library)
+    local, offsets, n = library.local_paths, library.offsets, library.n
+    radius, wall = world.config.robot_radius, world.wall_y
+    obs = np.asarray(world.obstacles, float)
+    reach = radius + obs[:, 2]
+    states = [np.array([0])]
+    feasible, clear, nxt = [], [], []
+    for k in range(horizon):
+        J = states[k]
+        y0 = pose[1] + k * offsets[0] + J * h
+        X = pose[0] + k * adv + local[:, :, 0]  # (n, S)
+        Y = y0[:, None, None] + local[None, :, :, 1]  # (nJ, n, S)
+        absy = np.abs(Y)
+        hit = (absy + radius > wall).any(-1)
+        c = wall - radius - absy.max(-1)
+        near = np.flatnonzero((obs[:, 0] + reach > X.min() - cap) & (obs[:, 0] - reach < X.max() + cap))
+        for i in near:
+            ox, oy, _ = obs[i]
+            dx2 = (X - ox) ** 2
+            cols = np.flatnonzero((dx2 < (reach[i] + cap) ** 2).any(0))
+            if not cols.size:  # inside the x window but no sample within reach + cap
+                continue
+            d2 = dx2[None][..., cols] + (Y[..., cols] - oy) ** 2
+            hit |= (d2 < reach[i] ** 2).any(-1)
+            c = np.minimum(c, np.sqrt(d2.min(-1)) - reach[i])
+        feasible.append(~hit)
+        clear.append(c)
+        targets = J[:, None] + np.arange(n)[None]
+        states.append(np.unique(targets[~hit]) if (~hit).any() else np.array([], int))
+        nxt.append(np.searchsorted(states[k + 1], targets).clip(0, max(len(states[k + 1]) - 1, 0)))
+    return Lattice(pose, states, feasible, clear, nxt)
+
+
+def lattice_poses(lattice: Lattice, library: PrimitiveLibrary, k: int) -> np.ndarray:
+    """Poses ``(len(states[k]), 3)`` of the lattice states at depth ``k``."""
+    adv, h = lattice_step(library)
+    J = lattice.states[k]
+    x = np.full(len(J), lattice.pose[0] + k * adv)
+    y = lattice.pose[1] + k * library.offsets[0] + J * h
+    return np.stack([x, y, np.zeros(len(J))], axis=1)
+
+
+def survival(lattice: Lattice) -> np.ndarray:
+    """Steps (``0..horizon``) the best sequence starting with each primitive survives, ``(n,)`` int8."""
+    steps = np.zeros(len(lattice.states[lattice.horizon]), np.int64)
+    for k in range(lattice.horizon - 1, -1, -1):
+        f, idx = lattice.feasible[k], lattice.nxt[k]
+        edge = np.where(f, 1 + (steps[idx] if len(steps) else 0), 0)
+        if k == 0:
+            return edge[0].astype(np.int8)
+        steps = edge.max(1)
+    return np.zeros(lattice.feasible[0].shape[1] if lattice.feasible else 0, np.int8)
+
+
+@dataclass
+class Ranking:
+    """The oracle's best plan from every lattice state (see :func:`rank_plans`).
+
+    ``choice[k][row]`` is the best primitive from ``states[k][row]``, ``keys[k][row, m]`` the
+    rank of each edge (higher is better), ``safe_steps`` the safe steps of the best plan from the
+    start.
+    """
+
+    choice: list[np.ndarray]
+    keys: list[np.ndarray]
+    safe_steps: int
+
+
+def rank_plans(lattice: Lattice, lateral_cost: np.ndarray, cap: float, quantum: float) -> Ranking:
+    """Rank plans lexicographically: safe steps, bottleneck clearance (binned), least lateral cost.
+
+    Parameters
+    ----------
+    lateral_cost : ndarray, shape (n,)
+        Cost of each primitive (the oracle uses ``|offset|``).
+    cap, quantum : float
+        Clearance is capped at ``cap`` and binned to ``quantum`` metres before it is compared.
+    """
+    horizon = lattice.horizon
+    n_end = len(lattice.states[horizon])
+    steps = np.zeros(n_end)
+    bott = np.full(n_end, np.floor(cap / quantum))
+    cost = np.zeros(n_end)
+    choice: list[np.ndarray] = [np.empty(0, int)] * horizon
+    keys: list[np.ndarray] = [np.empty(0)] * horizon
+    for k in range(horizon - 1, -1, -1):
+        f, idx, clear = lattice.feasible[k], lattice.nxt[k], lattice.clear[k]
+        cq = np.floor(np.clip(clear, 0.0, cap) / quantum)
+        if len(steps):
+            s_e, b_e, c_e = 1 + steps[idx], np.minimum(cq, bott[idx]), lateral_cost[None] + cost[idx]
+        else:
+            s_e, b_e, c_e = np.ones_like(cq), cq, lateral_cost[None] + 0 * cq
+        key = np.where(f, s_e * 1e6 + b_e * 1e3 - c_e, -1e9 + clear)
+        best = np.argmax(key, axis=1)
+        rows = np.arange(len(best))
+        ok = f[rows, best]
+        steps = np.where(ok, s_e[rows, best], 0.0)
+        bott = np.where(ok, b_e[rows, best], 0.0)
+        cost = np.where(ok, c_e[rows, best], 0.0)
+        choice[k], keys[k] = best, key
+    return Ranking(choice, keys, int(steps[0]) if len(steps) else 0)
