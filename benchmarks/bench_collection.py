@@ -12,8 +12,8 @@ import argparse
 import tempfile
 import time
 
-from husky_course.collect import collect
-from husky_course.dataset import load_dataset, stats
+from husky_course.data.collect import collect
+from husky_course.data.dataset import load_dataset, stats
 
 
 def timed(videos: int, backend: str, workers: int) -> tuple[float, dict]:

@@ -16,8 +16,9 @@ import time
 import numpy as np
 import torch
 
-from husky_course.learned_planners import algorithm1, algorithm1_reference, single_thread
-from husky_course.models import JointModel
+from husky_course.models.safety import JointModel
+from husky_course.planners.learned import algorithm1, algorithm1_reference
+from husky_course.training.inference import single_thread
 
 
 def timed(fn, repeats: int) -> float:
@@ -36,9 +37,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=200)
     args = parser.parse_args()
     try:
-        from husky_course import pipelines
+        from husky_course.training import builders
 
-        model = pipelines.get_joint(args.profile, progress=False, load_only=True).model
+        model = builders.get_joint(args.profile, progress=False, load_only=True).model
         source = f"trained joint model ({args.profile})"
     except Exception:  # no checkpoint yet: an untrained model costs the same
         torch.manual_seed(0)

@@ -24,11 +24,12 @@ def main() -> None:
     store = tempfile.mkdtemp(prefix="husky-pipeline-")
     os.environ["HUSKY_ARTIFACTS"] = store  # before importing the library's resolver users
 
-    from husky_course import diagnosis, pipelines
-    from husky_course.artifacts import get_dataset
     from husky_course.config import get_profile
-    from husky_course.evaluation import evaluate
-    from husky_course.planning import LEARNED_PLANNERS, make_planner
+    from husky_course.course import diagnosis
+    from husky_course.data.store import get_dataset
+    from husky_course.evaluation.episodes import evaluate
+    from husky_course.planners.registry import LEARNED_PLANNERS, make_planner
+    from husky_course.training import builders
 
     profile = get_profile(args.profile)
     worlds = args.worlds or profile.eval.worlds
@@ -44,15 +45,15 @@ def main() -> None:
     print(f"profile {profile.name}, fresh store {store}")
     try:
         stage("collect the dataset", lambda: get_dataset(profile, progress=False))
-        stage("train encoder + decoder", lambda: pipelines.get_encoder_decoder(profile, False))
-        stage("train the paper's reward net", lambda: pipelines.get_reward_net(profile, False))
-        stage("train safety CNN (image)", lambda: pipelines.get_safety_net(False, profile, False))
-        stage("train safety CNN (image + prim)", lambda: pipelines.get_safety_net(True, profile, False))
-        stage("train the joint model", lambda: pipelines.get_joint(profile, False))
+        stage("train encoder + decoder", lambda: builders.get_encoder_decoder(profile, False))
+        stage("train the paper's reward net", lambda: builders.get_reward_net(profile, False))
+        stage("train safety CNN (image)", lambda: builders.get_safety_net(False, profile, False))
+        stage("train safety CNN (image + prim)", lambda: builders.get_safety_net(True, profile, False))
+        stage("train the joint model", lambda: builders.get_joint(profile, False))
         stage("chapter 4's variants and probes", lambda: diagnosis.get_diagnosis(profile, False))
-        stage("train the RNN look-ahead", lambda: pipelines.get_rnn(profile, False))
-        stage("simulator survival labels", lambda: pipelines.get_survival_labels(profile, False))
-        stage("train the distilled planner", lambda: pipelines.get_distilled(profile, False))
+        stage("train the RNN look-ahead", lambda: builders.get_rnn(profile, False))
+        stage("simulator survival labels", lambda: builders.get_survival_labels(profile, False))
+        stage("train the distilled planner", lambda: builders.get_distilled(profile, False))
         for name in ("random", "heuristic", "lookahead", "rnn", "distilled", "oracle"):
             kwargs = {"look_ahead": 2, "profile": profile.name} if name in LEARNED_PLANNERS else {}
             planner = make_planner(name, **kwargs)

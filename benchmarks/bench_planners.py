@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import argparse
 
-from husky_course.evaluation import evaluate
-from husky_course.planning import HeuristicPlanner, make_planner
+from husky_course.evaluation.episodes import evaluate
+from husky_course.planners.classic import HeuristicPlanner
+from husky_course.planners.registry import make_planner
 
 
 def main() -> None:

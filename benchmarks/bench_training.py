@@ -30,7 +30,7 @@ def main() -> None:
 
     tmp = None
     if args.fresh:
-        from husky_course.artifacts import dataset_dir
+        from husky_course.data.store import dataset_dir
 
         src = dataset_dir(args.profile)
         tmp = tempfile.mkdtemp(prefix="husky-bench-")
@@ -38,11 +38,12 @@ def main() -> None:
         if (src / "meta.json").is_file():
             shutil.copytree(src, dataset_dir(args.profile))
 
-    from husky_course import diagnosis, pipelines
-    from husky_course.artifacts import get_dataset
     from husky_course.config import get_profile
-    from husky_course.dataset import reward_set
-    from husky_course.metrics import classification
+    from husky_course.course import diagnosis
+    from husky_course.data.splits import reward_set
+    from husky_course.data.store import get_dataset
+    from husky_course.evaluation.metrics import classification
+    from husky_course.training import builders, datasets, inference
 
     profile = get_profile(args.profile)
     t0 = time.perf_counter()
@@ -62,12 +63,12 @@ def main() -> None:
         rows.append((name, secs, note))
         return out
 
-    ed = timed("encoder + decoder", lambda: pipelines.get_encoder_decoder(profile))
-    _, rn = timed("reward net (paper)", lambda: pipelines.get_reward_net(profile))
+    ed = timed("encoder + decoder", lambda: builders.get_encoder_decoder(profile))
+    _, rn = timed("reward net (paper)", lambda: builders.get_reward_net(profile))
     rows[-1] = ("reward net (paper)", rn.history.seconds, f"{len(rn.history.train_loss)} epochs")
-    img = timed("safety CNN, image only", lambda: pipelines.get_safety_net(False, profile))
-    prim = timed("safety CNN, image + primitive", lambda: pipelines.get_safety_net(True, profile))
-    joint = timed("joint model", lambda: pipelines.get_joint(profile))
+    img = timed("safety CNN, image only", lambda: builders.get_safety_net(False, profile))
+    prim = timed("safety CNN, image + primitive", lambda: builders.get_safety_net(True, profile))
+    joint = timed("joint model", lambda: builders.get_joint(profile))
 
     start = time.perf_counter()
     diagnosis.get_diagnosis(profile)  # chapter 4's 6 reward-net variants and 3 probes, one artifact
@@ -76,7 +77,7 @@ def main() -> None:
         ("chapter 4 variants and probes", wall, "" if wall > 1 else "(already built: --fresh times it)")
     )
     rs = reward_set(ds, seed=profile.data.seed)
-    images = pipelines.images_tensor(ds)
+    images = datasets.images_tensor(ds)
 
     total = sum(s for name, s, _ in rows[1:])
     print(f"profile {profile.name}: {len(ds)} images, torch threads {torch.get_num_threads()}")
@@ -85,13 +86,13 @@ def main() -> None:
     print(f"  {'total training':38s} {total:8.1f} s  = {total / 60:.1f} min (target <= 15 min)")
 
     y = ds.labels[rs.val]
-    z = pipelines.encode(ed.model.encoder, images[torch.from_numpy(rs.val)])
+    z = inference.encode(ed.model.encoder, images[torch.from_numpy(rs.val)])
     with torch.no_grad():
         p_paper = rn.model(torch.from_numpy(z))[:, 0].numpy()
-    p_joint = pipelines.collision_probs(joint.model, ds.images[rs.val])[
+    p_joint = inference.collision_probs(joint.model, ds.images[rs.val])[
         np.arange(len(rs.val)), ds.applied[rs.val]
     ]
-    d = pipelines.safety_data(ds, rs.val)
+    d = datasets.safety_data(ds, rs.val)
     with torch.no_grad():
         p_img = torch.sigmoid(img.model.logit(d["image"])).numpy()
         p_prim = torch.sigmoid(prim.model.logit(d["image"], d["prim"])).numpy()

@@ -17,16 +17,17 @@ import time
 import numpy as np
 import torch
 
-from husky_course import pipelines
-from husky_course.artifacts import get_dataset
-from husky_course.collect import world_seed_for
 from husky_course.config import get_profile
-from husky_course.evaluation import evaluate, run_episode
-from husky_course.fast_sim import FastSimulator
-from husky_course.labels import survival_at
-from husky_course.learned_planners import DistilledPlanner
-from husky_course.models import SurvivalNet
-from husky_course.training import fit
+from husky_course.data import splits
+from husky_course.data.collect import world_seed_for
+from husky_course.data.labels import survival_at
+from husky_course.data.store import get_dataset
+from husky_course.evaluation.episodes import evaluate, run_episode
+from husky_course.models.safety import SurvivalNet
+from husky_course.planners.learned import DistilledPlanner
+from husky_course.sim.fast import FastSimulator
+from husky_course.training import builders, datasets
+from husky_course.training.trainer import fit
 
 
 def main() -> None:
@@ -37,7 +38,7 @@ def main() -> None:
     args = parser.parse_args()
     profile = get_profile(args.profile)
     ds = get_dataset(profile, progress=False)
-    base = pipelines.get_distilled(profile, load_only=True).model
+    base = builders.load("distilled", profile).model
     sim, planner = FastSimulator(profile.sim), DistilledPlanner(base)
     start = time.perf_counter()
     images, poses, seeds = [], [], []
@@ -50,12 +51,12 @@ def main() -> None:
     print(f"states visited by the planner: {len(images)} ({time.perf_counter() - start:.0f} s)")
     start = time.perf_counter()
     labels = survival_at(
-        np.array(seeds), np.array(poses), pipelines.DISTILL_HORIZON, profile.sim, progress=False
+        np.array(seeds), np.array(poses), profile.model.distill_horizon, profile.sim, progress=False
     )
     print(f"labelled in {time.perf_counter() - start:.0f} s")
-    tr, va = pipelines.split_all(ds, profile.data.seed)
-    surv = torch.from_numpy(pipelines.get_survival_labels(profile, progress=False))
-    pool = pipelines.images_tensor(ds)
+    tr, va = splits.split_all(ds, profile.data.seed)
+    surv = torch.from_numpy(builders.get_survival_labels(profile, progress=False))
+    pool = datasets.images_tensor(ds)
     new_images, new_labels = torch.from_numpy(np.array(images, np.float16)), torch.from_numpy(labels)
     cut = int(0.9 * len(new_images))
     train = {
@@ -67,7 +68,7 @@ def main() -> None:
         "survival": torch.cat([surv[torch.from_numpy(va)], new_labels[cut:]]),
     }
     torch.manual_seed(profile.train.distilled.seed)
-    model = SurvivalNet(pipelines.DISTILL_HORIZON)
+    model = SurvivalNet(profile.model.distill_horizon)
     start = time.perf_counter()
     fit(model, train, val, profile.train.distilled, progress=False)
     print(f"retrained in {time.perf_counter() - start:.0f} s")

@@ -20,9 +20,9 @@ import gymnasium as gym
 
 import husky_course
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset
-from husky_course.backends import make_simulator
-from husky_course import plotting, widgets
+from husky_course.data.store import get_dataset
+from husky_course.sim.backends import make_simulator
+from husky_course.ui import plotting, widgets
 
 profile = get_profile()  # HUSKY_PROFILE=quick (default) or full
 cfg = profile.sim
@@ -51,7 +51,7 @@ widgets.world_explorer(default_seed=0)
 
 # %%
 # NBVAL_CHECK_OUTPUT
-from husky_course.world import make_world
+from husky_course.sim.world import make_world
 w = make_world(0, cfg.world)
 print("obstacles:", w.obstacles.shape, " height (m):", cfg.world.obstacle_height)
 print("first obstacle (x, y, r):", np.round(w.obstacles[0], 3))
@@ -82,8 +82,8 @@ print(f"robot collision cylinder radius {cfg.world.robot_radius} m")
 # that a primitive *would hit* is visible in the image, for several fields of view.
 
 # %%
-ds = get_dataset()
-from husky_course.fov import hit_visibility
+ds = get_dataset(profile)
+from husky_course.course.fov import hit_visibility
 rng = np.random.default_rng(0)
 sample = rng.choice(len(ds), size=min(len(ds), 600), replace=False)
 fovs = [60, 90, 110, 130, 150]

@@ -17,11 +17,12 @@ import numpy as np
 import matplotlib.pyplot as plt
 
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset, dataset_dir
-from husky_course.collect import collect
-from husky_course.dataset import load_dataset, stats, encoder_decoder_pairs, reward_set
-from husky_course.backends import make_simulator
-from husky_course import plotting
+from husky_course.data.store import get_dataset, dataset_dir
+from husky_course.data.collect import collect
+from husky_course.data.dataset import load_dataset, stats
+from husky_course.data.splits import encoder_decoder_pairs, reward_set
+from husky_course.sim.backends import make_simulator
+from husky_course.ui import plotting
 
 profile = get_profile()
 ds = get_dataset(profile)  # built once (with a progress bar) and reused

@@ -21,12 +21,14 @@ import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset
-from husky_course.dataset import encoder_decoder_pairs
-from husky_course.collect import fresh_pairs
-from husky_course.models import EncoderDecoder, count_parameters
-from husky_course import pipelines, plotting
-from husky_course.metrics import image_errors
+from husky_course.data.store import get_dataset
+from husky_course.data.splits import encoder_decoder_pairs
+from husky_course.data.collect import fresh_pairs
+from husky_course.models.paper import EncoderDecoder
+from husky_course.models.base import count_parameters
+from husky_course.training import builders, inference
+from husky_course.ui import plotting
+from husky_course.evaluation.metrics import image_errors
 
 profile = get_profile()
 ds = get_dataset(profile)
@@ -74,7 +76,7 @@ print(f"decoder parameters: {count_parameters(model.decoder):,}")
 # %%
 split = encoder_decoder_pairs(ds, seed=profile.data.seed)
 cfg = profile.train.encoder_decoder
-ed = pipelines.get_encoder_decoder(profile)
+ed = builders.get_encoder_decoder(profile)
 hist = ed.history
 
 rows = [("learning rate", "1e-5", cfg.lr), ("batch size", 32, cfg.batch_size),
@@ -101,7 +103,7 @@ plt.show()
 
 # %%
 fresh = fresh_pairs(20, seed=777, config=profile.sim)
-pred_fresh = pipelines.predict_next(ed.model, fresh["image"], fresh["prim"])
+pred_fresh = inference.predict_next(ed.model, fresh["image"], fresh["prim"])
 fig = plotting.prediction_grid(fresh["image"], fresh["next"], pred_fresh)
 plt.show()
 
@@ -122,7 +124,7 @@ plt.show()
 
 # %%
 val_t = split.val_t
-pred_val = pipelines.predict_next(ed.model, ds.images[val_t], ds.applied[val_t])
+pred_val = inference.predict_next(ed.model, ds.images[val_t], ds.applied[val_t])
 true_val = ds.images[val_t + 1].astype(np.float32)
 copy_val = ds.images[val_t].astype(np.float32)
 table = {

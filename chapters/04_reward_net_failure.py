@@ -21,11 +21,13 @@ import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset
-from husky_course.dataset import reward_set
-from husky_course.metrics import classification
-from husky_course import pipelines, diagnosis, plotting
-from husky_course.plotting import markdown_table
+from husky_course.data.store import get_dataset
+from husky_course.data.splits import reward_set
+from husky_course.evaluation.metrics import classification
+from husky_course.training import builders, datasets, inference
+from husky_course.course import diagnosis
+from husky_course.ui import plotting
+from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 ds = get_dataset(profile)
@@ -55,8 +57,8 @@ print(f"majority-class rate on validation: {max(ds.labels[rs.val].mean(), 1 - ds
 # validation loss instead of running 2,000 epochs.
 
 # %%
-ed, rn = pipelines.get_reward_net(profile)
-latents = pipelines.encode(ed.model.encoder, pipelines.images_tensor(ds))
+ed, rn = builders.get_reward_net(profile)
+latents = inference.encode(ed.model.encoder, datasets.images_tensor(ds))
 with torch.no_grad():
     p_val = rn.model(torch.from_numpy(latents[rs.val]))[:, 0].numpy()
 paper_net = classification(ds.labels[rs.val], p_val)
@@ -115,9 +117,9 @@ display(Markdown(markdown_table([{"features": k, "R² for nearest-obstacle dista
 
 # %%
 ceiling = diagnosis.image_only_ceiling(ds, rs.val)
-image_only = pipelines.get_safety_net(False, profile)
-with_prim = pipelines.get_safety_net(True, profile)
-d = pipelines.safety_data(ds, rs.val)
+image_only = builders.get_safety_net(False, profile)
+with_prim = builders.get_safety_net(True, profile)
+d = datasets.safety_data(ds, rs.val)
 with torch.no_grad():
     p_img = torch.sigmoid(image_only.model.logit(d["image"])).numpy()
     p_prim = torch.sigmoid(with_prim.model.logit(d["image"], d["prim"])).numpy()

@@ -21,13 +21,16 @@ import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset
-from husky_course.dataset import encoder_decoder_pairs, reward_set
-from husky_course.labels import primitive_outcomes
-from husky_course.metrics import classification, image_errors, reliability, roc_auc
-from husky_course.models import JointModel, count_parameters
-from husky_course import pipelines, plotting
-from husky_course.plotting import markdown_table
+from husky_course.data.store import get_dataset
+from husky_course.data.splits import encoder_decoder_pairs, reward_set
+from husky_course.data.labels import primitive_outcomes
+from husky_course.evaluation.metrics import classification, image_errors, reliability, roc_auc
+from husky_course.models.safety import JointModel
+from husky_course.models.base import count_parameters
+from husky_course.training import builders, datasets, inference
+from husky_course.data import splits
+from husky_course.ui import plotting
+from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 ds = get_dataset(profile)
@@ -49,7 +52,7 @@ for part in ("encoder", "decoder", "safety"):
 # Unlike the paper's second pipeline, the colliding frames are now part of the encoder's training.
 
 # %%
-j = pipelines.get_joint(profile)
+j = builders.get_joint(profile)
 fig, ax = plt.subplots(figsize=(6, 3.5))
 plotting.plot_curves(j.history, ax, "Joint model: reconstruction + safety BCE", "total loss")
 plt.show()
@@ -64,18 +67,18 @@ print(f"trained for {len(j.history.train_loss)} epochs in {j.history.seconds:.0f
 
 # %%
 rs = reward_set(ds, seed=profile.data.seed)
-probs_rs = pipelines.collision_probs(j.model, ds.images[rs.val])
+probs_rs = inference.collision_probs(j.model, ds.images[rs.val])
 p_joint = probs_rs[np.arange(len(rs.val)), ds.applied[rs.val]]
 joint_q = classification(ds.labels[rs.val], p_joint)
 
-ed, rn = pipelines.get_reward_net(profile)
-latents = pipelines.encode(ed.model.encoder, ds.images[rs.val])
+ed, rn = builders.get_reward_net(profile)
+latents = inference.encode(ed.model.encoder, ds.images[rs.val])
 with torch.no_grad():
     p_paper = rn.model(torch.from_numpy(latents))[:, 0].numpy()
-d = pipelines.safety_data(ds, rs.val)
+d = datasets.safety_data(ds, rs.val)
 with torch.no_grad():
-    p_img = torch.sigmoid(pipelines.get_safety_net(False, profile).model.logit(d["image"])).numpy()
-    p_prim = torch.sigmoid(pipelines.get_safety_net(True, profile).model.logit(d["image"], d["prim"])).numpy()
+    p_img = torch.sigmoid(builders.get_safety_net(False, profile).model.logit(d["image"])).numpy()
+    p_prim = torch.sigmoid(builders.get_safety_net(True, profile).model.logit(d["image"], d["prim"])).numpy()
 y = ds.labels[rs.val]
 rows = [{"model": name, **classification(y, p).row()} for name, p in [
     ("paper's reward net (frozen latent)", p_paper), ("ch. 4: CNN end to end, image only", p_img),
@@ -96,9 +99,9 @@ plt.show()
 # validation images, does the model rank colliding primitives above safe ones?
 
 # %%
-tr_all, va_all = pipelines.split_all(ds, profile.data.seed)
+tr_all, va_all = splits.split_all(ds, profile.data.seed)
 truth = primitive_outcomes(ds, va_all, config=profile.sim)
-probs_all = pipelines.collision_probs(j.model, ds.images[va_all])
+probs_all = inference.collision_probs(j.model, ds.images[va_all])
 auc_all = roc_auc(truth.ravel(), probs_all.ravel())
 acc_all = float(((probs_all >= 0.5) == truth).mean())
 display(Markdown(
@@ -125,7 +128,7 @@ plt.show()
 # %%
 split = encoder_decoder_pairs(ds, seed=profile.data.seed)
 true_next = ds.images[split.val_t + 1].astype(np.float32)
-rows = [{"model": name, **image_errors(pipelines.predict_next(m, ds.images[split.val_t], ds.applied[split.val_t]),
+rows = [{"model": name, **image_errors(inference.predict_next(m, ds.images[split.val_t], ds.applied[split.val_t]),
                                         true_next).row()} for name, m in [("encoder + decoder (ch. 3)", ed.model),
                                                                           ("joint model", j.model)]]
 display(Markdown(markdown_table(rows)))
@@ -137,7 +140,7 @@ display(Markdown(
 # %% [markdown]
 # ## Exercises
 #
-# 1. Train the joint model with `safety_weight` 0.1 and 10 (`pipelines.get_joint(profile,
+# 1. Train the joint model with `safety_weight` 0.1 and 10 (`builders.get_joint(profile,
 #    safety_weight=...)`). Plot AUC and reconstruction BCE against the weight. Is there a trade-off?
 # 2. The safety head sees only the latent. Using the 25-primitive truth, find the primitives the
 #    model ranks worst (lowest per-primitive AUC). Where are they in the library, and why?

@@ -28,13 +28,18 @@ import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.artifacts import get_dataset
-from husky_course.models import count_parameters
-from husky_course.rnn_model import (HORIZON, RNNLookahead, horizon_errors, loop_predictions,
-                                    rnn_predictions, sequence_data)
-from husky_course import pipelines, plotting
+from husky_course.data.store import get_dataset
+from husky_course.models.base import count_parameters
+from husky_course.models.rnn import RNNLookahead
+from husky_course.evaluation.horizons import horizon_errors
+from husky_course.training.inference import loop_predictions, rnn_predictions
+from husky_course.training.datasets import sequence_data
+from husky_course.training import builders
+from husky_course.data import splits
+from husky_course.ui import plotting
 
 profile = get_profile()
+HORIZON = profile.model.rnn_horizon
 ds = get_dataset(profile)
 
 # %%
@@ -42,14 +47,14 @@ ds = get_dataset(profile)
 torch.manual_seed(0)
 print(RNNLookahead())
 print(f"parameters: {count_parameters(RNNLookahead()):,}")
-tr, va = pipelines.split_all(ds, profile.data.seed)
-train_seq = sequence_data(ds, tr)
+tr, va = splits.split_all(ds, profile.data.seed)
+train_seq = sequence_data(ds, tr, HORIZON)
 print(f"training sequences: {len(tr)}, supervised steps: {int(train_seq['label_mask'].sum())}, "
       f"of which colliding: {int((train_seq['labels'] * train_seq['label_mask']).sum())}")
 
 # %%
-rnn = pipelines.get_rnn(profile)
-joint = pipelines.get_joint(profile)
+rnn = builders.get_rnn(profile)
+joint = builders.get_joint(profile)
 fig, ax = plt.subplots(figsize=(6, 3.5))
 plotting.plot_curves(rnn.history, ax, "RNN look-ahead: image BCE + collision BCE over 5 steps", "total loss")
 plt.show()
@@ -93,8 +98,8 @@ plt.show()
 
 # %%
 errs = {
-    "RNN": horizon_errors(lambda i, p: rnn_predictions(rnn.model, i, p), ds, va),
-    "decode/re-encode loop (Algorithm 1)": horizon_errors(lambda i, p: loop_predictions(joint.model, i, p), ds, va),
+    "RNN": horizon_errors(lambda i, p: rnn_predictions(rnn.model, i, p), ds, va, HORIZON),
+    "decode/re-encode loop (Algorithm 1)": horizon_errors(lambda i, p: loop_predictions(joint.model, i, p), ds, va, HORIZON),
 }
 h = np.arange(1, HORIZON + 1)
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))

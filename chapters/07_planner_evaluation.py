@@ -37,11 +37,14 @@ import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.evaluation import clopper_pearson, collision_cause, eval_world_seeds, evaluate, run_episode
-from husky_course.fast_sim import FastSimulator
-from husky_course.planning import make_planner
-from husky_course import pipelines, plotting, widgets
-from husky_course.plotting import markdown_table
+from husky_course.evaluation.statistics import clopper_pearson
+from husky_course.evaluation.analysis import collision_cause
+from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
+from husky_course.sim.fast import FastSimulator
+from husky_course.planners.registry import make_planner
+from husky_course.training import builders
+from husky_course.ui import plotting, widgets
+from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 N = profile.eval.worlds
@@ -49,7 +52,7 @@ LOOK_AHEAD = 2
 
 def planner(name, look_ahead=LOOK_AHEAD, **kw):
     if name in ("lookahead", "rnn", "distilled"):
-        return make_planner(name, look_ahead=look_ahead, profile=profile.name, train=True, **kw)
+        return make_planner(name, look_ahead=look_ahead, profile=profile, train=True, **kw)
     return make_planner(name, **kw)
 
 print(f"profile {profile.name}: {N} held-out worlds, seeds {eval_world_seeds(N)[0]}..{eval_world_seeds(N)[-1]}")
@@ -188,7 +191,7 @@ if fails:
 # one. The book shows primitive 12 (straight ahead) in the first world.
 
 # %%
-widgets.primitive_explorer(pipelines.get_joint(profile).model, default_seed=0, default_primitive=12)
+widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, default_primitive=12)
 
 # %% [markdown]
 # ## Exercises

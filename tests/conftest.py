@@ -7,6 +7,10 @@ import os
 import matplotlib
 import pytest
 
+from husky_course.config import get_profile
+
+QUICK = get_profile("quick")  # resolved once, passed down
+
 os.environ.setdefault("HUSKY_PROFILE", "quick")
 # Headless plotting for the unit tests only. Not via MPLBACKEND: notebook kernels inherit the
 # environment, and MPLBACKEND=Agg there would replace the inline backend and drop every figure.
@@ -15,8 +19,8 @@ matplotlib.use("Agg")
 
 @pytest.fixture(scope="session")
 def small_dataset_dir(tmp_path_factory: pytest.TempPathFactory):
-    from husky_course.collect import collect
+    from husky_course.data.collect import collect
 
     out = tmp_path_factory.mktemp("ds") / "data"
-    collect(out, "quick", videos=120, seed=3, workers=1, progress=False)
+    collect(out, QUICK, videos=120, seed=3, workers=1, progress=False)
     return out

@@ -16,28 +16,31 @@ import numpy as np
 import pytest
 import torch
 
-from husky_course import collect as collect_module
-from husky_course.artifacts import dataset_dir, model_dir
-from husky_course.backends import make_simulator
 from husky_course.cli import main
-from husky_course.collect import collect, fresh_pairs
 from husky_course.config import ConfigError, get_profile
-from husky_course.dataset import DatasetError, load_dataset, load_npy, val_videos
-from husky_course.env import HuskyNavEnv
-from husky_course.evaluation import clopper_pearson, eval_world_seeds
-from husky_course.fast_sim import FastSimulator
-from husky_course.metrics import image_errors, roc_auc
-from husky_course.models import EncoderDecoder, JointModel, LatentRewardNet, check_images, encode_primitive
-from husky_course.planning import (
-    HeuristicPlanner,
-    PlannerError,
-    check_look_ahead,
-    check_observation,
-    make_planner,
-)
-from husky_course.primitives import PrimitiveError, make_library
-from husky_course.training import CheckpointError, History, fit, load_model, save_model
-from husky_course.world import make_world
+from husky_course.data import collect as collect_module
+from husky_course.data.collect import collect, fresh_pairs
+from husky_course.data.dataset import load_dataset
+from husky_course.data.io import DatasetError, load_npy
+from husky_course.data.splits import val_videos
+from husky_course.data.store import dataset_dir, model_dir
+from husky_course.evaluation.episodes import eval_world_seeds
+from husky_course.evaluation.metrics import image_errors, roc_auc
+from husky_course.evaluation.statistics import clopper_pearson
+from husky_course.models.base import check_images, encode_primitive
+from husky_course.models.paper import EncoderDecoder, LatentRewardNet
+from husky_course.models.safety import JointModel
+from husky_course.planners.base import PlannerError, check_look_ahead, check_observation
+from husky_course.planners.classic import HeuristicPlanner
+from husky_course.planners.registry import make_planner
+from husky_course.sim.backends import make_simulator
+from husky_course.sim.env import HuskyNavEnv
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.primitives import PrimitiveError, make_library
+from husky_course.sim.world import make_world
+from husky_course.training.trainer import CheckpointError, History, fit, load_model, save_model
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 VIDEOS, SEED = 6, 5  # a dataset of 6 videos takes a few hundredths of a second
 
@@ -57,7 +60,7 @@ def no_temporary_files_left(tmp_path):
 
 @pytest.fixture(scope="module")
 def tiny_dataset(tmp_path_factory) -> Path:
-    return collect(tmp_path_factory.mktemp("tiny") / "ds", "quick", videos=VIDEOS, seed=SEED, progress=False)
+    return collect(tmp_path_factory.mktemp("tiny") / "ds", QUICK, videos=VIDEOS, seed=SEED, progress=False)
 
 
 @pytest.fixture
@@ -100,9 +103,9 @@ def test_pose_of_wrong_length():
 
 def test_bad_primitive_for_the_decoder():
     with pytest.raises(ValueError, match=r"primitive indices must be in 0\.\.24"):
-        encode_primitive(torch.tensor([3, 25]))
+        encode_primitive(torch.tensor([3, 25]), 25)
     with pytest.raises(TypeError, match="primitive indices must be integers"):
-        encode_primitive(torch.tensor([1.5]))
+        encode_primitive(torch.tensor([1.5]), 25)
 
 
 # --- images for the models, observations for the planners ------------------------------------
@@ -122,7 +125,7 @@ def test_bad_primitive_for_the_decoder():
 )
 def test_bad_images_for_the_models(images, error, message):
     with pytest.raises(error, match=message):
-        check_images(images)
+        check_images(images, 50)
     with pytest.raises(error, match=message):
         EncoderDecoder()(images, torch.zeros(2, dtype=torch.long))
 
@@ -131,12 +134,12 @@ def test_nan_depth_for_the_models():
     images = torch.zeros(2, 50, 50)
     images[1, 10, 10] = float("nan")
     with pytest.raises(ValueError, match="NaN"):
-        check_images(images)
+        check_images(images, 50)
 
 
 def test_depth_outside_0_1_for_the_models():
     with pytest.raises(ValueError, match=r"\[0, 1\]"):
-        check_images(torch.full((2, 50, 50), 3.0))
+        check_images(torch.full((2, 50, 50), 3.0), 50)
 
 
 @pytest.mark.parametrize(
@@ -232,10 +235,10 @@ def test_dataset_from_another_config(dataset_copy):
     quick = get_profile("quick")
     other_sim = collect_module.replace(quick, sim=collect_module.replace(quick.sim, max_primitives=5))
     for kwargs in (
-        {"profile": "quick", "videos": VIDEOS + 1, "seed": SEED},
-        {"profile": "quick", "videos": VIDEOS, "seed": SEED + 1},
+        {"profile": QUICK, "videos": VIDEOS + 1, "seed": SEED},
+        {"profile": QUICK, "videos": VIDEOS, "seed": SEED + 1},
         {"profile": other_sim, "videos": VIDEOS, "seed": SEED},
-        {"profile": "quick", "videos": VIDEOS, "seed": SEED, "backend": "pybullet"},
+        {"profile": QUICK, "videos": VIDEOS, "seed": SEED, "backend": "pybullet"},
     ):
         with pytest.raises(DatasetError, match=r"made with a different config \(see .*spec\.json\)"):
             collect(dataset_copy, progress=False, **kwargs)
@@ -247,7 +250,7 @@ def test_collect_into_a_foreign_directory(tmp_path):
     out.mkdir()
     (out / "notes.txt").write_text("not a dataset")
     with pytest.raises(DatasetError, match="is not empty and holds no dataset spec"):
-        collect(out, "quick", videos=VIDEOS, seed=SEED, progress=False)
+        collect(out, QUICK, videos=VIDEOS, seed=SEED, progress=False)
     assert listing(out) == {"notes.txt": b"not a dataset"}
 
 
@@ -259,12 +262,12 @@ def test_resume_with_a_corrupted_shard(tmp_path, monkeypatch):
 
     monkeypatch.setattr(collect_module, "_merge", killed)
     with pytest.raises(KeyboardInterrupt):
-        collect(out, "quick", videos=VIDEOS, seed=SEED, progress=False)
+        collect(out, QUICK, videos=VIDEOS, seed=SEED, progress=False)
     monkeypatch.undo()
     shard = out / "shards" / "shard_00000.npz"
     shard.write_bytes(shard.read_bytes()[:100])
     with pytest.raises(DatasetError, match=r"shard .*shard_00000\.npz is truncated or corrupted.*delete it"):
-        collect(out, "quick", videos=VIDEOS, seed=SEED, progress=False)
+        collect(out, QUICK, videos=VIDEOS, seed=SEED, progress=False)
     assert not (out / "meta.json").exists() and not list(out.glob("*.npy")), "a half-made dataset"
 
 
@@ -279,20 +282,20 @@ def test_resume_with_a_corrupted_shard(tmp_path, monkeypatch):
         ({"videos": 3, "seed": -1}, ValueError, r"collection seed -1 is out of range 0\.\.2146"),
         ({"videos": 3, "seed": 2148}, ValueError, r"collection seed 2148 is out of range"),
         ({"videos": 3, "backend": "gpu"}, ConfigError, "unknown backend 'gpu': choose one of fast, pybullet"),
-        ({"videos": 3, "profile": "huge"}, ConfigError, "unknown profile 'huge': choose one of quick, full"),
+        ({"videos": 3, "profile": "huge"}, ConfigError, "expected a Profile, got 'huge': resolve the name once"),
     ],
 )
 def test_bad_collection_sizes_write_nothing(tmp_path, kwargs, error, message):
     out = tmp_path / "ds"
     with pytest.raises(error, match=message):
-        collect(out, progress=False, **{"profile": "quick", **kwargs})
+        collect(out, progress=False, **{"profile": QUICK, **kwargs})
     assert not out.exists(), f"a refused collection created {out}"
 
 
 def test_fractional_collection_seed_writes_nothing(tmp_path):
     out = tmp_path / "ds"
     with pytest.raises(ValueError, match="collection seed"):
-        collect(out, "quick", videos=3, seed=1.5, progress=False)
+        collect(out, QUICK, videos=3, seed=1.5, progress=False)
     assert not out.exists()
 
 
@@ -320,8 +323,8 @@ def test_missing_artifacts(tmp_path, monkeypatch):
     with pytest.raises(
         DatasetError, match=r"no finished dataset \(no meta\.json\): run `python -m husky_course"
     ):
-        load_dataset(dataset_dir("quick"))
-    ckpt = model_dir("encoder_decoder", {"any": 1}, "quick") / "model.pt"
+        load_dataset(dataset_dir(QUICK))
+    ckpt = model_dir("encoder_decoder", {"any": 1}, QUICK) / "model.pt"
     with pytest.raises(CheckpointError, match=r"missing checkpoint .*encoder_decoder-\w+/model\.pt"):
         load_model(ckpt, EncoderDecoder())
     assert not (tmp_path / "artifacts").exists(), "looking for an artifact created directories"
@@ -501,7 +504,6 @@ def test_bad_statistics_inputs():
         ([], "required: command"),
         (["fly"], "invalid choice: 'fly'"),
         (["train", "everything"], "invalid choice: 'everything'"),
-        (["collect", "--videos", "3"], "required: --out"),
         (["collect", "--out", "{tmp}/ds", "--videos", "abc"], "argument --videos: invalid int value: 'abc'"),
         (["evaluate", "--worlds", "3"], "required: --planner"),
         (["evaluate", "--planner", "random", "--worlds", "1e3"], "invalid int value: '1e3'"),

@@ -3,18 +3,15 @@ import json
 import numpy as np
 import pytest
 
-from husky_course import collect as collect_mod
 from husky_course.cli import main as cli_main
-from husky_course.collect import collect
-from husky_course.config import ConfigError
-from husky_course.dataset import (
-    DatasetError,
-    encoder_decoder_pairs,
-    load_dataset,
-    pair_indices,
-    reward_set,
-    stats,
-)
+from husky_course.config import ConfigError, get_profile
+from husky_course.data import collect as collect_mod
+from husky_course.data.collect import collect
+from husky_course.data.dataset import load_dataset, stats
+from husky_course.data.io import DatasetError
+from husky_course.data.splits import encoder_decoder_pairs, pair_indices, reward_set
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 NAMES = (
     "images",
@@ -81,11 +78,11 @@ def test_pairs_never_cross_videos_or_collisions(small_dataset_dir):
 
 
 def test_same_seed_same_bytes_for_any_worker_count(tmp_path):
-    a = collect(tmp_path / "a", "quick", videos=60, seed=4, workers=1, progress=False)
-    b = collect(tmp_path / "b", "quick", videos=60, seed=4, workers=2, progress=False)
+    a = collect(tmp_path / "a", QUICK, videos=60, seed=4, workers=1, progress=False)
+    b = collect(tmp_path / "b", QUICK, videos=60, seed=4, workers=2, progress=False)
     for name in NAMES:
         assert (a / f"{name}.npy").read_bytes() == (b / f"{name}.npy").read_bytes(), name
-    c = collect(tmp_path / "c", "quick", videos=60, seed=5, progress=False)
+    c = collect(tmp_path / "c", QUICK, videos=60, seed=5, progress=False)
     assert (a / "images.npy").read_bytes() != (c / "images.npy").read_bytes()
 
 
@@ -122,21 +119,21 @@ def test_interrupted_run_resumes_to_identical_result(tmp_path, monkeypatch):
 
 
 def test_bad_inputs_are_clear_and_lose_nothing(tmp_path, small_dataset_dir, capsys):
-    with pytest.raises(ConfigError, match="unknown profile"):
+    with pytest.raises(ConfigError, match="expected a Profile"):
         collect(tmp_path / "x", "huge")
     with pytest.raises(ValueError, match="positive integer"):
-        collect(tmp_path / "x", "quick", videos=-5)
+        collect(tmp_path / "x", QUICK, videos=-5)
     with pytest.raises(ConfigError, match="unknown backend"):
-        collect(tmp_path / "x", "quick", videos=5, backend="unity")
+        collect(tmp_path / "x", QUICK, videos=5, backend="unity")
     with pytest.raises(ValueError, match="workers"):
-        collect(tmp_path / "x", "quick", videos=5, workers=0)
+        collect(tmp_path / "x", QUICK, videos=5, workers=0)
     with pytest.raises(ValueError, match="collection seed"):
-        collect(tmp_path / "x", "quick", videos=5, seed=10**6)
+        collect(tmp_path / "x", QUICK, videos=5, seed=10**6)
     # a directory holding a dataset made with another config is refused, and left untouched
-    out = collect(tmp_path / "d", "quick", videos=8, progress=False)
+    out = collect(tmp_path / "d", QUICK, videos=8, progress=False)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     with pytest.raises(DatasetError, match="different config"):
-        collect(out, "quick", videos=9, progress=False)
+        collect(out, QUICK, videos=9, progress=False)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     # truncated and corrupted arrays
     trunc = out / "labels.npy"

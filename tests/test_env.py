@@ -7,7 +7,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import husky_course  # noqa: F401  (registers HuskyNav-v0)
-from husky_course.env import HuskyNavEnv
+from husky_course.sim.env import HuskyNavEnv
 
 
 @pytest.mark.parametrize("backend", ["fast", "pybullet"])

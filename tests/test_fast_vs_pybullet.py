@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from husky_course.fast_sim import FastSimulator
-from husky_course.pybullet_sim import PyBulletSimulator
-from husky_course.world import OUTLINE_VERTICES
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.pybullet_backend import PyBulletSimulator
+from husky_course.sim.world import OUTLINE_VERTICES
 
 
 @pytest.fixture(scope="module")

@@ -6,24 +6,25 @@ import numpy as np
 import pytest
 import torch
 
-from husky_course.dataset import load_dataset
-from husky_course.labels import primitive_outcomes, survival_steps, survival_steps_parallel
-from husky_course.learned_planners import (
+from husky_course.config import get_profile
+from husky_course.data.dataset import load_dataset
+from husky_course.data.labels import primitive_outcomes, survival_steps, survival_steps_parallel
+from husky_course.evaluation.horizons import horizon_errors
+from husky_course.models.rnn import RNNLookahead
+from husky_course.models.safety import JointModel, SurvivalNet
+from husky_course.planners.base import PlannerError
+from husky_course.planners.learned import (
     DistilledPlanner,
     LookaheadPlanner,
     RNNPlanner,
     algorithm1,
     algorithm1_reference,
 )
-from husky_course.models import JointModel, SurvivalNet
-from husky_course.planning import PlannerError, make_planner
-from husky_course.rnn_model import (
-    RNNLookahead,
-    horizon_errors,
-    loop_predictions,
-    rnn_predictions,
-    sequence_data,
-)
+from husky_course.planners.registry import make_planner
+from husky_course.training.datasets import sequence_data
+from husky_course.training.inference import loop_predictions, rnn_predictions
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +84,7 @@ def test_learned_planner_bad_inputs(joint, rnn, tmp_path, monkeypatch):
     (tmp_path / "quick").mkdir()
     for name in ("lookahead", "rnn", "distilled"):
         with pytest.raises(PlannerError, match="no trained"):
-            make_planner(name, look_ahead=1, profile="quick")
+            make_planner(name, look_ahead=1, profile=QUICK)
 
 
 def test_rnn_rollout_shapes_and_sequence_masks(rnn, small_dataset_dir):
@@ -128,9 +129,10 @@ def test_survival_labels_agree_with_one_step_outcomes(small_dataset_dir):
 
 
 def test_exercise_checks(small_dataset_dir):
-    from husky_course import exercises
-    from husky_course.diagnosis import shifted_labels
-    from husky_course.rnn_model import horizon_errors, rnn_predictions
+    from husky_course.course import exercises
+    from husky_course.course.diagnosis import shifted_labels
+    from husky_course.evaluation.horizons import horizon_errors
+    from husky_course.training.inference import rnn_predictions
 
     ds = load_dataset(small_dataset_dir)
     assert exercises.check_shifted_labels(ds, shifted_labels(ds))

@@ -6,17 +6,14 @@ import numpy as np
 import pytest
 import torch
 
-from husky_course.config import TrainConfig
-from husky_course.metrics import classification, image_errors, reliability, roc_auc
-from husky_course.models import (
-    EncoderDecoder,
-    JointModel,
-    LatentRewardNet,
-    SafetyNet,
-    count_parameters,
-    encode_primitive,
-)
-from husky_course.training import CheckpointError, History, fit, load_model, save_model
+from husky_course.config import TrainConfig, get_profile
+from husky_course.evaluation.metrics import classification, image_errors, reliability, roc_auc
+from husky_course.models.base import count_parameters, encode_primitive
+from husky_course.models.paper import EncoderDecoder, LatentRewardNet
+from husky_course.models.safety import JointModel, SafetyNet
+from husky_course.training.trainer import CheckpointError, History, fit, load_model, save_model
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 
 def _tiny_pairs(n: int = 96, seed: int = 0) -> dict[str, torch.Tensor]:
@@ -51,12 +48,12 @@ def test_shapes_and_parameter_counts():
 
 def test_primitive_encoding_and_bad_inputs():
     torch.testing.assert_close(
-        encode_primitive(torch.tensor([0, 12, 24])), torch.tensor([[-1.0], [0.0], [1.0]])
+        encode_primitive(torch.tensor([0, 12, 24]), 25), torch.tensor([[-1.0], [0.0], [1.0]])
     )
     with pytest.raises(ValueError, match="0..24"):
-        encode_primitive(torch.tensor([25]))
+        encode_primitive(torch.tensor([25]), 25)
     with pytest.raises(TypeError):
-        encode_primitive(torch.tensor([1.5]))
+        encode_primitive(torch.tensor([1.5]), 25)
     ed = EncoderDecoder()
     with pytest.raises(ValueError, match="shape"):
         ed.encoder(torch.rand(2, 40, 40))
@@ -104,7 +101,7 @@ def test_killed_run_resumes_to_the_same_result(tmp_path, monkeypatch):
     ref = EncoderDecoder()
     ref_hist = fit(ref, data, val, cfg, run_dir=tmp_path / "ref", progress=False)
 
-    import husky_course.training as training
+    import husky_course.training.trainer as training
 
     calls = {"n": 0}
     real_save = training._save
@@ -178,16 +175,16 @@ def test_diagnosis_is_cached_and_round_trips():
     """Chapter 4's variants and probes: built once (``make test`` trains them up front), then read."""
     import json
 
-    from husky_course import diagnosis
+    from husky_course.course import diagnosis
 
-    first = diagnosis.get_diagnosis("quick", progress=False)
+    first = diagnosis.get_diagnosis(QUICK, progress=False)
     assert [r.variant for r in first.variants] == list(diagnosis.VARIANTS)
     assert set(first.probes) == {
         "raw image (2,500 pixels)",
         "frozen latent (15)",
         "untrained encoder's latent (15)",
     }
-    again = diagnosis.get_diagnosis("quick", progress=False)  # from results.json: no training
+    again = diagnosis.get_diagnosis(QUICK, progress=False)  # from results.json: no training
     assert again.to_dict() == json.loads(json.dumps(first.to_dict()))
     assert [r.history.seconds for r in again.variants] == [r.history.seconds for r in first.variants]
     faithful, off_by_one = again.variants[0].quality, again.variants[1].quality

@@ -11,27 +11,23 @@ import numpy as np
 import pytest
 
 from husky_course import cli
-from husky_course.backends import make_simulator
-from husky_course.collect import VIDEO_STRIDE, collect, world_seed_for
-from husky_course.config import EVAL_SEED_BASE, SimConfig, WorldConfig
-from husky_course.evaluation import (
+from husky_course.config import EVAL_SEED_BASE, SimConfig, WorldConfig, get_profile
+from husky_course.data.collect import VIDEO_STRIDE, collect, world_seed_for
+from husky_course.evaluation.episodes import (
     EVAL_SET_MAX,
     EVAL_SET_STRIDE,
-    clopper_pearson,
     eval_world_seeds,
     evaluate,
     is_eval_seed,
     run_episode,
 )
-from husky_course.planning import (
-    PLANNERS,
-    OraclePlanner,
-    Planner,
-    PlannerError,
-    check_look_ahead,
-    check_observation,
-    make_planner,
-)
+from husky_course.evaluation.statistics import clopper_pearson
+from husky_course.planners.base import Planner, PlannerError, check_look_ahead, check_observation
+from husky_course.planners.oracle import OraclePlanner
+from husky_course.planners.registry import PLANNERS, make_planner
+from husky_course.sim.backends import make_simulator
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 BASIC = ("random", "heuristic", "oracle")
 JSON_FIELDS = {
@@ -121,9 +117,9 @@ def test_eval_seeds_disjoint_from_training(tmp_path):
         with pytest.raises(ValueError):
             world_seed_for(seed, video)  # would reach the evaluation range
     with pytest.raises(ValueError):
-        collect(tmp_path / "a", "quick", videos=top_video + 2, seed=top_seed, progress=False)
+        collect(tmp_path / "a", QUICK, videos=top_video + 2, seed=top_seed, progress=False)
     with pytest.raises(ValueError):
-        collect(tmp_path / "b", "quick", videos=1, seed=top_seed + 1, progress=False)
+        collect(tmp_path / "b", QUICK, videos=1, seed=top_seed + 1, progress=False)
     for s in (0, 1, EVAL_SET_MAX):
         seeds = eval_world_seeds(1000, s)
         assert seeds.min() >= EVAL_SEED_BASE > highest_training and seeds.max() < 2**32

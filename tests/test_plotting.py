@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from husky_course.plotting import markdown_table
+from husky_course.ui.plotting import markdown_table
 
 
 def test_markdown_table_from_mappings():
@@ -46,7 +46,7 @@ def _recording_figure(calls):
 
 
 def test_widget_offline_draws_the_static_figure_once(monkeypatch):
-    from husky_course import widgets
+    from husky_course.ui import widgets
 
     monkeypatch.setenv("HUSKY_STATIC_WIDGETS", "1")
     calls = []
@@ -60,7 +60,7 @@ def test_widget_offline_draws_the_static_figure_once(monkeypatch):
 def test_widget_live_redraws_with_the_controls_values(monkeypatch):
     import IPython.display
 
-    from husky_course import widgets
+    from husky_course.ui import widgets
 
     monkeypatch.setattr(widgets, "widgets_live", lambda: True)
     shown = []

@@ -19,11 +19,13 @@ import numpy as np
 import pytest
 import torch
 
-from husky_course.collect import collect
-from husky_course.config import TrainConfig
-from husky_course.dataset import STEP_ARRAYS, VIDEO_ARRAYS
-from husky_course.models import EncoderDecoder
-from husky_course.training import fit
+from husky_course.config import TrainConfig, get_profile
+from husky_course.data.collect import collect
+from husky_course.data.dataset import STEP_ARRAYS, VIDEO_ARRAYS
+from husky_course.models.paper import EncoderDecoder
+from husky_course.training.trainer import fit
+
+QUICK = get_profile("quick")  # resolved once, passed down
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -52,8 +54,9 @@ def test_sigkill_during_collection_then_resume(tmp_path):
     out = tmp_path / "killed"
     proc = _start(
         f"""
-        from husky_course.collect import collect
-        collect({str(out)!r}, "quick", videos=3000, seed=5, workers=1, progress=False)
+        from husky_course.config import get_profile
+        from husky_course.data.collect import collect
+        collect({str(out)!r}, get_profile("quick"), videos=3000, seed=5, workers=1, progress=False)
         """
     )
     killed = _kill_when(
@@ -63,9 +66,9 @@ def test_sigkill_during_collection_then_resume(tmp_path):
     assert killed, "collection finished before it could be killed; make it longer"
     assert proc.returncode == -signal.SIGKILL
     assert not (out / "meta.json").exists()
-    collect(out, "quick", videos=3000, seed=5, workers=1, progress=False)  # resume
+    collect(out, QUICK, videos=3000, seed=5, workers=1, progress=False)  # resume
     ref = tmp_path / "ref"
-    collect(ref, "quick", videos=3000, seed=5, workers=1, progress=False)
+    collect(ref, QUICK, videos=3000, seed=5, workers=1, progress=False)
     for name in STEP_ARRAYS + VIDEO_ARRAYS:
         assert (out / f"{name}.npy").read_bytes() == (ref / f"{name}.npy").read_bytes(), name
 
@@ -75,9 +78,9 @@ def test_sigkill_during_training_then_resume(tmp_path):
     run = tmp_path / "run"
     code = f"""
         import torch
-        from husky_course.config import TrainConfig
-        from husky_course.models import EncoderDecoder
-        from husky_course.training import fit
+        from husky_course.config import TrainConfig, get_profile
+        from husky_course.models.paper import EncoderDecoder
+        from husky_course.training.trainer import fit
         torch.set_num_threads(1)
         g = torch.Generator().manual_seed(0)
         def data(n, seed):

@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 
-from husky_course.camera import linearize_depth_buffer, normalize_depth
 from husky_course.config import CameraConfig, ConfigError, PrimitiveConfig, get_profile
-from husky_course.fast_sim import FastSimulator
-from husky_course.primitives import PrimitiveError, make_library
-from husky_course.world import make_world
+from husky_course.sim.camera import linearize_depth_buffer, normalize_depth
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.primitives import PrimitiveError, make_library
+from husky_course.sim.world import make_world
 
 
 def test_library_has_25_primitives_that_return_to_heading():
@@ -73,7 +73,7 @@ def test_depth_range_and_orientation():
     # the ground is below the horizon: bottom rows are close, and get closer downwards
     assert d[-1].mean() < d[30].mean() < 1.0
     # a single obstacle to the robot's left appears in the left half of the image
-    from husky_course.world import World
+    from husky_course.sim.world import World
 
     lone = World(0, world.config, np.array([[3.0, 1.5, 0.3]]), np.zeros(3))
     sim.load(lone)
@@ -93,7 +93,7 @@ def test_depth_linearisation():
 
 
 def test_collision_against_walls_and_obstacles():
-    from husky_course.world import World
+    from husky_course.sim.world import World
 
     sim = FastSimulator()
     world = sim.load(0)

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import __version__
 from ..checks import check_int, is_int
-from ..config import EVAL_SEED_BASE, Profile, SimConfig, to_dict
+from ..config import EVAL_SEED_BASE, Profile, SimConfig, check_profile, to_dict
 from ..progress import tqdm
 from ..sim.backends import check_backend, make_simulator
 from ..sim.base import Simulator
@@ -41,8 +41,14 @@ def world_seed_for(seed: int, video: int) -> int:
     return world_seed
 
 
-def play_video(sim: Simulator, seed: int, video: int, max_primitives: int) -> dict[str, np.ndarray]:
-    """Play one random-policy video and return its arrays (step arrays and one-row video arrays)."""
+def play_video(
+    sim: Simulator, seed: int, video: int, max_primitives: int, render: bool = True
+) -> dict[str, np.ndarray]:
+    """Play one random-policy video and return its arrays (step arrays and one-row video arrays).
+
+    With ``render=False`` the depth images are not drawn (``images`` is empty): what a calibration
+    that only counts primitives needs, several times faster.
+    """
     world = sim.load(world_seed_for(seed, video))
     rng = np.random.default_rng([seed, video])
     pose = world.start.copy()
@@ -65,7 +71,7 @@ def play_video(sim: Simulator, seed: int, video: int, max_primitives: int) -> di
         prims = prims.copy()
         prims[-1] = -1
     return {
-        "images": sim.depth(np.asarray(poses)).astype(np.float16),
+        "images": sim.depth(np.asarray(poses)).astype(np.float16) if render else np.empty((0,), np.float16),
         "prims": prims,
         "labels": labels,
         "applied": np.asarray(applied, np.int16),
@@ -156,6 +162,7 @@ def collect(
     Sizes default to the profile's ``data`` config. Finished shards are kept until the final
     arrays and ``meta.json`` are written, so an interrupted run resumes where it stopped.
     """
+    profile = check_profile(profile)
     videos = profile.data.videos if videos is None else videos
     seed = profile.data.seed if seed is None else seed
     backend = check_backend(backend or profile.data.backend)

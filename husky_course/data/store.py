@@ -21,7 +21,7 @@ import json
 import os
 from pathlib import Path
 
-from ..config import Profile, config_hash
+from ..config import Profile, check_profile, config_hash
 from .collect import collect, collection_spec
 from .dataset import Dataset, load_dataset
 from .io import DatasetError
@@ -42,7 +42,7 @@ def artifacts_root() -> Path:
 
 def dataset_dir(profile: Profile) -> Path:
     """Directory of the profile's random-policy dataset (it may not exist yet)."""
-    data = profile.data
+    data = check_profile(profile).data
     spec = collection_spec(profile, data.videos, data.seed, data.backend)
     return artifacts_root() / profile.name / f"dataset-{config_hash(spec)}"
 
@@ -89,7 +89,7 @@ def stored_dataset_id(profile: Profile) -> str:
 
 def model_dir(name: str, fingerprint: dict, profile: Profile) -> Path:
     """Directory of artifact ``name`` made under ``fingerprint`` (it may not exist yet)."""
-    return artifacts_root() / profile.name / "models" / f"{name}-{config_hash(fingerprint)}"
+    return artifacts_root() / check_profile(profile).name / "models" / f"{name}-{config_hash(fingerprint)}"
 
 
 def runs_dir(name: str, fingerprint: dict, profile: Profile) -> Path:
