@@ -6,22 +6,22 @@ PY := $(VENV)/bin/python
 PROFILE ?= full
 unexport MPLBACKEND  # kernels must use the inline backend, or notebooks lose their figures
 
-.PHONY: book test install data lint bench clean
+.PHONY: book test install data lint sync bench clean
 
 $(VENV)/.installed: requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval"  # fail loudly if incomplete
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	touch $@
 
 install: $(VENV)/.installed
 
 data: install  ## build the dataset and train the models the chapters need, once, with progress bars
-	HUSKY_PROFILE=$(PROFILE) $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
-	HUSKY_PROFILE=$(PROFILE) $(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
+	$(PY) -m husky_course collect --profile $(PROFILE) --workers 2 > /dev/null
+	$(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
 	@# jupyter-book's execution cache knows notebooks, not HUSKY_PROFILE: drop it when the profile changes
@@ -33,11 +33,14 @@ book: data  ## execute every chapter (full profile by default) and build the HTM
 	@echo "The book is at $(CURDIR)/_build/html/index.html"
 
 lint: install
-	$(VENV)/bin/ruff check husky_course tests benchmarks tools
+	$(VENV)/bin/ruff check husky_course tests benchmarks chapters
+
+sync: install  ## after editing a chapter source (or its notebook outside Jupyter): update the other side
+	$(VENV)/bin/jupytext --sync chapters/*.py
 
 test: install lint  ## unit tests + every notebook under nbval, quick profile
-	HUSKY_PROFILE=quick $(PY) -c "from husky_course.artifacts import get_dataset; get_dataset()"
-	HUSKY_PROFILE=quick $(PY) -m husky_course train all --profile quick --no-progress > /dev/null
+	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
+	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	HUSKY_PROFILE=quick $(PY) -m pytest tests notebooks --nbval-lax -p no:cacheprovider
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)

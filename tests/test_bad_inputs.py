@@ -282,7 +282,7 @@ def test_resume_with_a_corrupted_shard(tmp_path, monkeypatch):
         ({"videos": 3, "seed": -1}, ValueError, r"collection seed -1 is out of range 0\.\.2146"),
         ({"videos": 3, "seed": 2148}, ValueError, r"collection seed 2148 is out of range"),
         ({"videos": 3, "backend": "gpu"}, ConfigError, "unknown backend 'gpu': choose one of fast, pybullet"),
-        ({"videos": 3, "profile": "huge"}, ConfigError, "expected a Profile, got 'huge': resolve the name once"),
+        ({"videos": 3, "profile": "huge"}, ConfigError, "expected a Profile, got 'huge': resolve the name"),
     ],
 )
 def test_bad_collection_sizes_write_nothing(tmp_path, kwargs, error, message):

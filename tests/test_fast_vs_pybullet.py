@@ -29,26 +29,34 @@ def _views(fast, n_worlds=50, per_world=5, seed=0):
         yield world, free
 
 
-def _p99_errors(fast, ref) -> np.ndarray:
-    """99th percentile of |fast - PyBullet| for each of the 250 views."""
+def _errors(fast, ref, q: float) -> np.ndarray:
+    """The ``q``-th percentile of |fast - PyBullet| over the pixels of each of the 250 views."""
     out = []
     for world, poses in _views(fast):
         fast.load(world)
         ref.load(world)
         err = np.abs(fast.depth(poses) - ref.depth(poses))
-        out += list(np.percentile(err.reshape(len(poses), -1), 99, axis=1))
+        out += list(np.percentile(err.reshape(len(poses), -1), q, axis=1))
     return np.array(out)
 
 
-def test_depth_agrees_with_pybullet(sims):
-    """The issue's criterion, on every view: p99 of |fast - PyBullet| <= 0.02."""
+def _p99_errors(fast, ref) -> np.ndarray:
+    return _errors(fast, ref, 99)
+
+
+#: the largest |fast - PyBullet| allowed on any pixel of any view (normalised depth, 1e-4 = 0.5 mm).
+#: Measured: 1.8e-05 at worst over the 250 views, 1.0e-05 median (float32 rounding of the depth
+#: buffer). One pixel whose column lands on the other side of a silhouette would be ~0.1 or more.
+MAX_PIXEL_ERROR = 1e-4
+
+
+def test_depth_agrees_with_pybullet_on_every_pixel(sims):
+    """Every pixel of every view: |fast - PyBullet| <= MAX_PIXEL_ERROR (not a percentile)."""
     fast, ref = sims
-    p99 = _p99_errors(fast, ref)
-    print(f"views {len(p99)}: worst p99 {p99.max():.2e}, median {np.median(p99):.2e}")
-    assert len(p99) >= 200
-    # measured here: worst 1.4e-05 (float32 rounding of the depth buffer); the prism mesh makes
-    # both backends draw the same geometry, so any silhouette off by one pixel would show up
-    assert p99.max() <= 0.02
+    worst = _errors(fast, ref, 100)
+    print(f"views {len(worst)}: worst pixel {worst.max():.2e}, median view's worst {np.median(worst):.2e}")
+    assert len(worst) >= 200
+    assert worst.max() <= MAX_PIXEL_ERROR
 
 
 def test_depth_against_pybullets_native_cylinder():

@@ -1,0 +1,74 @@
+"""The artifact store: keyed by content (a moved store is reused as it is), and loading never builds."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import replace
+
+import pytest
+
+from husky_course import cli
+from husky_course.config import TrainConfig, TrainingPlan, get_profile
+from husky_course.data import store
+from husky_course.training import builders, trainer
+from husky_course.training.trainer import CheckpointError
+
+QUICK = get_profile("quick")
+ONE_EPOCH = TrainConfig(epochs=1, patience=1)
+TINY = replace(  # the quick profile, small enough to build a store in seconds
+    QUICK,
+    data=replace(QUICK.data, videos=40, shard_videos=20),
+    train=TrainingPlan(
+        encoder_decoder=replace(ONE_EPOCH, batch_size=64), reward_net=replace(ONE_EPOCH, batch_size=16)
+    ),
+)
+
+
+def _snapshot(root):
+    return {str(p.relative_to(root)): p.stat().st_mtime_ns for p in root.rglob("*") if p.is_file()}
+
+
+def _no_training(*args, **kwargs):
+    raise AssertionError("fit() was called: something was rebuilt")
+
+
+def test_a_copied_store_is_reused_without_rebuilding(tmp_path, monkeypatch):
+    first = tmp_path / "checkout-a" / "artifacts"
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(first))
+    ed, rn = builders.get_reward_net(TINY, progress=False)
+    assert "path" not in json.dumps(rn.fingerprint)  # keyed by the encoder's content, not its file
+
+    moved = tmp_path / "elsewhere" / "re-cloned" / "artifacts"
+    shutil.copytree(first, moved)
+    shutil.rmtree(first)
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(moved))
+    before = _snapshot(moved)
+    monkeypatch.setattr(builders, "fit", _no_training)
+    monkeypatch.setattr(store, "collect", _no_training)
+    ed2, rn2 = builders.get_reward_net(TINY, progress=False)
+    loaded = builders.load("reward_net", TINY)
+    assert _snapshot(moved) == before, "the copied store was written to"
+    assert rn2.fingerprint == rn.fingerprint == loaded.fingerprint
+    assert rn2.history.best_val == rn.history.best_val
+
+
+def test_load_never_builds(tmp_path, monkeypatch):
+    root = tmp_path / "artifacts"
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(root))
+    monkeypatch.setattr(store, "collect", _no_training)
+    monkeypatch.setattr(trainer, "fit", _no_training)
+    for name in builders.MODELS:
+        command = rf"`python -m husky_course train {name} --profile quick`"
+        with pytest.raises(CheckpointError, match=f"train it with {command}"):
+            builders.load(name, TINY)
+    assert not root.exists(), "loading created files"
+
+
+def test_cli_collect_without_out_fills_the_store(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(tmp_path / "artifacts"))
+    assert cli.main(["collect", "--profile", "quick", "--videos", "5", "--no-progress"]) == 0
+    small = replace(QUICK, data=replace(QUICK.data, videos=5))
+    assert (store.dataset_dir(small) / "meta.json").is_file()
+    assert not store.dataset_dir(QUICK).exists()  # not under the 1,000-video name
+    assert json.loads(capsys.readouterr().out)["videos"] == 5
