@@ -6,14 +6,14 @@ PY := $(VENV)/bin/python
 PROFILE ?= full
 unexport MPLBACKEND  # kernels must use the inline backend, or notebooks lose their figures
 
-.PHONY: book test install data lint sync bench clean
+.PHONY: book test install data lint sync lab bench clean
 
 $(VENV)/.installed: requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext"  # fail loudly if incomplete
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	touch $@
 
@@ -34,6 +34,9 @@ book: data  ## execute every chapter (full profile by default) and build the HTM
 
 lint: install
 	$(VENV)/bin/ruff check husky_course tests benchmarks chapters
+
+lab: install  ## the chapters in JupyterLab, in the profile the book was last built with (else quick)
+	HUSKY_PROFILE=$$(cat _build/.profile 2>/dev/null || echo quick) $(VENV)/bin/jupyter lab notebooks/
 
 sync: install  ## after editing a chapter source (or its notebook outside Jupyter): update the other side
 	$(VENV)/bin/jupytext --sync chapters/*.py

@@ -16,6 +16,7 @@ import time
 import numpy as np
 import torch
 
+from husky_course.config import get_profile
 from husky_course.models.safety import JointModel
 from husky_course.planners.learned import algorithm1, algorithm1_reference
 from husky_course.training.inference import single_thread
@@ -39,7 +40,7 @@ def main() -> None:
     try:
         from husky_course.training import builders
 
-        model = builders.get_joint(args.profile, progress=False, load_only=True).model
+        model = builders.load("joint", get_profile(args.profile)).model
         source = f"trained joint model ({args.profile})"
     except Exception:  # no checkpoint yet: an untrained model costs the same
         torch.manual_seed(0)

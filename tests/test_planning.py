@@ -93,10 +93,13 @@ def test_registry_errors(monkeypatch):
     assert issubclass(PlannerError, ValueError)
     with pytest.raises(PlannerError, match="bad arguments"):
         make_planner("heuristic", look_ahead=2)
-    monkeypatch.setitem(sys.modules, "husky_course.learned_planners", None)  # module unavailable
     for name in ("lookahead", "rnn", "distilled"):
-        with pytest.raises(PlannerError, match="learned.*checkpoints"):
+        with pytest.raises(PlannerError, match="is learned: pass profile="):
             make_planner(name, look_ahead=1)
+    monkeypatch.setitem(sys.modules, "husky_course.planners.learned", None)  # module unavailable
+    for name in ("lookahead", "rnn", "distilled"):
+        with pytest.raises(PlannerError, match="learned: it needs torch and trained checkpoints"):
+            make_planner(name, look_ahead=1, profile=QUICK)
 
 
 def test_check_look_ahead():
