@@ -21,7 +21,7 @@ the artifact store, so chapter 4 reads them instead of training while it runs.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 import torch
@@ -35,6 +35,7 @@ from ..data.labels import nearest_obstacle_distance, primitive_outcomes
 from ..data.splits import reward_set
 from ..data.store import dataset_id, get_dataset, model_dir
 from ..evaluation.metrics import Classification, classification, image_errors, roc_auc
+from ..models.base import DEFAULT_DIMS
 from ..models.paper import Encoder, LatentRewardNet
 from ..models.safety import Probe
 from ..progress import tqdm
@@ -133,7 +134,7 @@ def run_reward_variant(
     """Train the paper's reward net under ``variant``; score it against the *true* labels."""
     if variant.random_encoder:
         torch.manual_seed(cfg.seed + 1)
-        encoder = Encoder()
+        encoder = Encoder(replace(DEFAULT_DIMS, image_size=encoder.size, latent=encoder.fc.out_features))
         encoder.eval()
     if variant.depth_in_metres:  # bypasses the [0, 1] input check on purpose: that is the slip
         far = (camera or CameraConfig()).far  # normalised depth x far: metres, give or take `near`
@@ -290,12 +291,13 @@ def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
     latents = encode(encoder, images)
     dist = nearest_obstacle_distance(ds, config=profile.sim)
     torch.manual_seed(1)
-    random_latents = encode(Encoder().eval(), images)
+    random_latents = encode(Encoder(profile.dims).eval(), images)
+    pixels, latent = profile.dims.image_size**2, profile.dims.latent
     probes = {}
     for name, x in (
-        ("raw image (2,500 pixels)", ds.images),
-        ("frozen latent (15)", latents),
-        ("untrained encoder's latent (15)", random_latents),
+        (f"raw image ({pixels:,} pixels)", ds.images),
+        (f"frozen latent ({latent})", latents),
+        (f"untrained encoder's latent ({latent})", random_latents),
     ):
         probes[name] = probe_r2(x[tr], dist[tr], x[va], dist[va], profile.train.probe)
         bar.update()
