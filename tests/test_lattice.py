@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from husky_course.data.labels import best_continuations
+from husky_course.evaluation.episodes import episode_start
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import LatticeError, expand, survival
@@ -59,7 +60,7 @@ def test_oracle_safe_steps_match_brute_force():
     """The oracle's best plan over 3 steps survives as long as the best of all 25**3 sequences."""
     for sim, pose in _states(10, 3, seed=7):
         oracle = OraclePlanner(horizon=3)
-        oracle.reset(sim, pose)
+        oracle.reset(episode_start(oracle, sim, sim.world.seed, pose, 3))
         best = int(brute_force_survival(sim, pose, 3).max())
         assert oracle.crossable == (best == 3)
         assert int(survival(expand(sim.world, sim.library, pose, 3, cap=0.3)).max()) == best

@@ -16,6 +16,7 @@ from husky_course.data.collect import VIDEO_STRIDE, collect, world_seed_for
 from husky_course.evaluation.episodes import (
     EVAL_SET_MAX,
     EVAL_SET_STRIDE,
+    episode_start,
     eval_world_seeds,
     evaluate,
     is_eval_seed,
@@ -55,9 +56,9 @@ def test_planners_return_valid_index(sim, name):
     rng = np.random.default_rng(0)
     for world_seed in eval_world_seeds(5, seed=7):
         world = sim.load(int(world_seed))
-        planner.reset(sim, world.start.copy())
+        planner.reset(episode_start(planner, sim, int(world_seed), world.start, 10))
         for obs in (rng.random((50, 50), dtype=np.float32), sim.depth(world.start[None])[0]):
-            action = planner.act(obs, world.start.copy())
+            action = planner.act(obs, world.start.copy() if planner.privileged else None)
             assert type(action) is int and 0 <= action < 25
             assert planner.last_scores is not None and planner.last_scores.shape == (25,)
             assert np.isfinite(planner.last_scores).all()
@@ -67,7 +68,7 @@ def test_planners_return_valid_index(sim, name):
 def test_bad_observations_raise(sim, name):
     planner = make_planner(name)
     world = sim.load(int(eval_world_seeds(1)[0]))
-    planner.reset(sim, world.start.copy())
+    planner.reset(episode_start(planner, sim, world.seed, world.start, 10))
     good = sim.depth(world.start[None])[0]
     nan = good.copy()
     nan[3, 4] = np.nan
@@ -154,7 +155,7 @@ class Recorder(Planner):
         super().__init__()
         self.calls: list[tuple] = []
 
-    def reset(self, sim, pose):
+    def reset(self, start):
         self.calls.append(("reset",))
 
     def act(self, obs, pose=None):

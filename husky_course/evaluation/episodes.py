@@ -16,7 +16,7 @@ import numpy as np
 
 from ..checks import check_int, is_int
 from ..config import EVAL_SEED_BASE
-from ..planners.base import Planner
+from ..planners.base import EpisodeStart, Planner, episode_key
 from ..progress import tqdm
 from ..sim.backends import make_simulator
 from ..sim.base import Simulator
@@ -78,6 +78,23 @@ class Episode:
     scores: list[np.ndarray | None] = field(default_factory=list)  #: with ``record=True``: planner scores
 
 
+def episode_start(
+    planner: Planner, sim: Simulator, world_seed: int, pose: np.ndarray, max_primitives: int
+) -> EpisodeStart:
+    """What ``planner`` may know at the start of an episode in ``sim``'s loaded world at ``pose``.
+
+    The simulator and the pose go to privileged planners (the oracle) only.
+    """
+    privileged = planner.privileged
+    return EpisodeStart(
+        library=sim.library,
+        max_primitives=int(max_primitives),
+        key=episode_key(int(world_seed)),
+        sim=sim if privileged else None,
+        pose=np.array(pose, float) if privileged else None,
+    )
+
+
 def run_episode(
     planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = 10, record: bool = False
 ) -> Episode:
@@ -90,7 +107,8 @@ def run_episode(
     world = sim.load(int(world_seed))
     pose = world.start.copy()
     t0 = time.perf_counter()
-    planner.reset(sim, pose.copy())
+    privileged = planner.privileged  # only these see the simulator and the true pose
+    planner.reset(episode_start(planner, sim, int(world_seed), pose, max_primitives))
     reset_time = time.perf_counter() - t0
     obs = sim.depth(pose[None])[0]
     actions: list[int] = []
@@ -100,7 +118,7 @@ def run_episode(
     scores: list[np.ndarray | None] = []
     for _ in range(max_primitives):
         t0 = time.perf_counter()
-        action = planner.act(obs, pose.copy())
+        action = planner.act(obs, pose.copy() if privileged else None)
         times.append(time.perf_counter() - t0)
         if record:
             observations.append(obs)

@@ -1,23 +1,33 @@
 """The planner protocol: choose the next motion primitive from the onboard depth image.
 
 Every planner follows one protocol, used by :func:`husky_course.evaluation.episodes.run_episode`:
-``reset(sim, pose)`` at the start of an episode, then per step ``act(obs, pose) -> index`` and
-``observe(action, next_obs)`` (``next_obs`` is ``None`` after a collision). ``act`` leaves the
-per-primitive scores it used in ``last_scores`` (shape ``(n,)``, *lower is better*) for plots.
+``reset(start)`` at the start of an episode (an :class:`EpisodeStart`), then per step
+``act(obs, pose) -> index`` and ``observe(action, next_obs)`` (``next_obs`` is ``None`` after a
+collision). ``act`` leaves the per-primitive scores it used in ``last_scores`` (shape ``(n,)``,
+*lower is better*) for plots.
 
-Only the oracle (:mod:`~husky_course.planners.oracle`) may use the simulator or the true pose; the
-others see depth images. The non-learned planners live in :mod:`~husky_course.planners.classic`,
+**Privileged information.** A planner declares ``privileged = True`` to be given the simulator
+(with the world loaded) and the true pose: only the oracle (:mod:`~husky_course.planners.oracle`)
+does. Every other planner receives, and can only receive, what the robot has: its depth images,
+the primitives it applied (through :meth:`Planner.observe`) and its own primitive library (the
+motion it knows it makes); ``start.sim``, ``start.pose`` and ``act``'s ``pose`` are ``None``.
+``tests/test_privileged.py`` checks this. The non-learned planners live in
+:mod:`~husky_course.planners.classic`,
 the learned ones in :mod:`~husky_course.planners.learned`, and
 :mod:`~husky_course.planners.registry` builds any of them by name.
 """
 
 from __future__ import annotations
 
+import hashlib
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..checks import is_int
 from ..config import SimConfig
 from ..sim.base import Simulator
+from ..sim.primitives import PrimitiveLibrary
 
 _CAMERA_SIZE = SimConfig().camera.size
 
@@ -48,20 +58,57 @@ def check_look_ahead(k: object) -> int:
     return int(k)
 
 
+def episode_key(world_seed: int) -> int:
+    """An opaque 63-bit number per world, to seed a planner's own randomness.
+
+    A planner must not get the world seed itself: :func:`husky_course.sim.world.make_world` would
+    rebuild the whole world from it. A hash gives the same per-episode reproducibility and says
+    nothing about the world.
+    """
+    digest = hashlib.sha256(f"husky-episode-{int(world_seed)}".encode()).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
+
+
+@dataclass(frozen=True)
+class EpisodeStart:
+    """What a planner is told when an episode starts.
+
+    Attributes
+    ----------
+    library : PrimitiveLibrary
+        The robot's own primitives: it knows how each one moves it (dead reckoning).
+    max_primitives : int
+        Primitives in a full episode (the course is crossed after this many).
+    key : int
+        An opaque per-episode number (:func:`episode_key`) for a planner's own randomness.
+    sim, pose :
+        The simulator with the world loaded and the true start pose: given to privileged
+        planners only, ``None`` for every other.
+    """
+
+    library: PrimitiveLibrary
+    max_primitives: int
+    key: int
+    sim: Simulator | None = None
+    pose: np.ndarray | None = None
+
+
 class Planner:
     """Base class. Subclasses implement :meth:`act` and may override :meth:`reset`/:meth:`observe`."""
 
     name: str = "base"
+    #: True only for planners allowed the simulator and the true pose (the oracle)
+    privileged: bool = False
 
     def __init__(self) -> None:
         self.last_scores: np.ndarray | None = None
 
-    def reset(self, sim: Simulator, pose: np.ndarray) -> None:
-        """Start an episode in ``sim``'s loaded world at ``pose`` (only the oracle may keep ``sim``)."""
+    def reset(self, start: EpisodeStart) -> None:
+        """Start an episode (see :class:`EpisodeStart`; ``sim``/``pose`` only if privileged)."""
         self.last_scores = None
 
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        """The primitive index to apply, given the depth image ``obs`` (and, for the oracle, ``pose``)."""
+        """The primitive index to apply, given the depth image ``obs`` (``pose``: privileged only)."""
         raise NotImplementedError
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:

@@ -8,16 +8,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
-from ..sim.base import Simulator
 from ..sim.camera import denormalize_depth, pixel_tangents
 from ..sim.primitives import primitive_offsets, s_curve
-from .base import Planner, PlannerError, check_observation
+from .base import EpisodeStart, Planner, PlannerError, check_observation
 
 
 class RandomPlanner(Planner):
     """Uniform over the library: the data-collection policy.
 
-    The generator is reseeded at every :meth:`reset` from ``(seed, world seed)``, so an episode
+    The generator is reseeded at every :meth:`reset` from ``(seed, episode key)`` (the key is an
+    opaque hash of the world, :func:`~husky_course.planners.base.episode_key`), so an episode
     depends only on the planner's seed and the world, whatever the evaluation order.
     """
 
@@ -28,10 +28,10 @@ class RandomPlanner(Planner):
         self.seed, self.n = int(seed), int(n)
         self.rng = np.random.default_rng([self.seed, 0])
 
-    def reset(self, sim: Simulator, pose: np.ndarray) -> None:
-        super().reset(sim, pose)
-        self.n = sim.library.n
-        self.rng = np.random.default_rng([self.seed, sim.world.seed if sim.world is not None else 0])
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self.n = start.library.n
+        self.rng = np.random.default_rng([self.seed, start.key])
 
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         check_observation(obs)
@@ -96,8 +96,8 @@ class HeuristicPlanner(Planner):
         self.advance, self.memory = prim.advance, bool(memory)
         self._points = np.empty((0, 2))
 
-    def reset(self, sim: Simulator, pose: np.ndarray) -> None:
-        super().reset(sim, pose)
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
         self._points = np.empty((0, 2))
 
     def scan(self, obs: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..sim.base import Simulator
 from ..sim.lattice import LatticeError, Ranking, expand, rank_plans
-from .base import Planner, PlannerError, check_observation
+from .base import EpisodeStart, Planner, PlannerError, check_observation
 
 
 class OraclePlanner(Planner):
@@ -30,6 +30,7 @@ class OraclePlanner(Planner):
     """
 
     name = "oracle"
+    privileged = True
 
     def __init__(self, cap: float = 0.3, quantum: float = 0.02, horizon: int | None = None) -> None:
         super().__init__()
@@ -41,8 +42,11 @@ class OraclePlanner(Planner):
         self._step = 0
         self._action_scores: list[np.ndarray] = []
 
-    def reset(self, sim: Simulator, pose: np.ndarray) -> None:
-        super().reset(sim, pose)
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        sim, pose = start.sim, start.pose
+        if sim is None or pose is None:
+            raise RuntimeError("the oracle is privileged: run it with run_episode, which gives it sim, pose")
         self._sim, self._step = sim, 0
         horizon = self.horizon if self.horizon is not None else sim.config.max_primitives
         safe_steps = self._solve(np.asarray(pose, float), horizon)
@@ -52,7 +56,7 @@ class OraclePlanner(Planner):
         """Plan from ``pose``; return the safe steps of the chosen plan."""
         sim = self._sim
         if sim is None or sim.world is None:
-            raise RuntimeError("OraclePlanner.reset(sim, pose) must be called with a loaded world")
+            raise RuntimeError("OraclePlanner.reset needs a simulator with a loaded world")
         try:
             lattice = expand(sim.world, sim.library, pose, horizon, self.cap)
         except LatticeError as exc:
@@ -94,7 +98,7 @@ class OraclePlanner(Planner):
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         check_observation(obs)
         if self._sim is None:
-            raise RuntimeError("call reset(sim, pose) before act()")
+            raise RuntimeError("call reset(start) before act()")
         off_plan = self._step >= len(self.plan) or (
             pose is not None and not np.allclose(pose, self.plan_poses[self._step], atol=1e-9)
         )
