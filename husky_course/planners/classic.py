@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
-from ..sim.camera import denormalize_depth, pixel_tangents
 from ..sim.primitives import primitive_offsets, s_curve
 from .base import EpisodeStart, Planner, PlannerError, check_observation
+from .perception import DepthScan
 
 
 class RandomPlanner(Planner):
@@ -42,11 +42,10 @@ class RandomPlanner(Planner):
 class HeuristicPlanner(Planner):
     """Non-learned: pick the primitive whose swept body stays farthest from what the camera sees.
 
-    The depth image is turned into a laser scan: obstacles and walls are vertical, so in the rows
-    that can see neither the ground nor an obstacle's top within ``far``, each column's depth is
-    the distance to the nearest vertical surface, i.e. one point ``(mount_forward + D, D u_j)`` in
-    the robot frame per column (columns at ``far`` see nothing). The *clearance* of a path is the
-    smallest distance from these points to it minus the robot radius, capped at ``cap``.
+    The depth image is turned into a laser scan (:class:`~husky_course.planners.perception.DepthScan`):
+    one robot-frame point per column that sees a vertical surface within ``far``. The *clearance*
+    of a path is the smallest distance from these points to it minus the robot radius, capped at
+    ``cap``.
 
     With ``depth = 2`` the planner also looks one primitive further: a first primitive is worth
     ``min(its clearance, best clearance of any second primitive after it)``, so it does not drive
@@ -77,14 +76,8 @@ class HeuristicPlanner(Planner):
         cfg = config or SimConfig()
         self.config, self.cap, self.lateral_weight, self.depth = cfg, float(cap), float(lateral_weight), depth
         self.radius = cfg.world.robot_radius
-        cam, prim = cfg.camera, cfg.primitives
-        self.u, v = pixel_tangents(cam)
-        height = cfg.world.obstacle_height - cam.mount_height
-        with np.errstate(divide="ignore"):
-            ground = np.where(v < 0, cam.mount_height / -v, np.inf)
-            top = np.where(v > 0, height / v, np.inf)
-        rows = np.flatnonzero((ground >= cam.far) & (top >= cam.far))
-        self.rows = rows if rows.size else np.array([cam.size // 2])
+        prim = cfg.primitives
+        self.scan = DepthScan(cfg)  #: image -> robot-frame points of the surfaces it sees
         # robot-frame points along each primitive and along every two-primitive sequence
         self.offsets = primitive_offsets(prim)
         s = np.linspace(0.0, 1.0, path_samples)
@@ -99,14 +92,6 @@ class HeuristicPlanner(Planner):
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
         self._points = np.empty((0, 2))
-
-    def scan(self, obs: np.ndarray) -> np.ndarray:
-        """Robot-frame points ``(m, 2)`` of the vertical surfaces that ``obs`` sees within ``far``."""
-        cam = self.config.camera
-        col = np.median(check_observation(obs, cam.size)[self.rows], axis=0)
-        seen = col < 0.999
-        d = denormalize_depth(col[seen], cam)
-        return np.stack([cam.mount_forward + d, d * self.u[seen]], axis=1)
 
     def _clear(self, paths: np.ndarray, pts: np.ndarray) -> np.ndarray:
         if not len(pts):

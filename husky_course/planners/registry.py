@@ -11,13 +11,15 @@ from typing import Any
 
 from .base import Planner, PlannerError
 from .classic import HeuristicPlanner, RandomPlanner
+from .mapping import MappingPlanner
 from .oracle import OraclePlanner
 
-PLANNERS = ("random", "heuristic", "lookahead", "rnn", "distilled", "oracle")
+PLANNERS = ("random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "oracle")
 LEARNED_PLANNERS = ("lookahead", "rnn", "distilled")
 _CLASSES: dict[str, type[Planner]] = {
     "random": RandomPlanner,
     "heuristic": HeuristicPlanner,
+    "mapping": MappingPlanner,
     "oracle": OraclePlanner,
 }
 

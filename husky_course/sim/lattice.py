@@ -18,6 +18,7 @@ primitive's recorded samples) and measuring its clearance. Two backward passes r
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,31 +76,27 @@ def lattice_step(library: PrimitiveLibrary) -> tuple[float, float]:
     return float(ends[0, 0]), h
 
 
-def expand(world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, cap: float) -> Lattice:
-    """Expand the lattice from ``pose`` for ``horizon`` steps (see the module docstring).
+#: ``check(X, Y) -> (hit, clear)``: for the sample positions of every edge of one lattice level,
+#: ``X (n, S)`` (the same for every state) and ``Y (states, n, S)``, whether each edge touches
+#: something and its clearance (m), both ``(states, n)``
+EdgeCheck = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def disc_check(obstacles: np.ndarray, wall_y: float, robot_radius: float, cap: float) -> EdgeCheck:
+    """The simulator's own contact rule as an :data:`EdgeCheck`: the robot disc against obstacle
+    discs ``(x, y, r)`` and two side walls at ``|y| = wall_y``.
 
     ``cap`` (m) bounds the clearance that is measured: obstacles further than ``cap`` beyond
     contact are skipped, so clearances above ``cap`` are lower bounds, which is all a ranking
     that caps clearance needs.
     """
-    pose = np.asarray(pose, float)
-    if abs(pose[2]) >= 1e-9:
-        raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]}")
-    adv, h = lattice_step(library)
-    local, offsets, n = library.local_paths, library.offsets, library.n
-    radius, wall = world.config.robot_radius, world.wall_y
-    obs = np.asarray(world.obstacles, float)
-    reach = radius + obs[:, 2]
-    states = [np.array([0])]
-    feasible, clear, nxt = [], [], []
-    for k in range(horizon):
-        J = states[k]
-        y0 = pose[1] + k * offsets[0] + J * h
-        X = pose[0] + k * adv + local[:, :, 0]  # (n, S)
-        Y = y0[:, None, None] + local[None, :, :, 1]  # (nJ, n, S)
+    obs = np.asarray(obstacles, float).reshape(-1, 3)
+    reach = robot_radius + obs[:, 2]
+
+    def check(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         absy = np.abs(Y)
-        hit = (absy + radius > wall).any(-1)
-        c = wall - radius - absy.max(-1)
+        hit = (absy + robot_radius > wall_y).any(-1)
+        c = wall_y - robot_radius - absy.max(-1)
         near = np.flatnonzero((obs[:, 0] + reach > X.min() - cap) & (obs[:, 0] - reach < X.max() + cap))
         for i in near:
             ox, oy, _ = obs[i]
@@ -110,6 +107,36 @@ def expand(world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: i
             d2 = dx2[None][..., cols] + (Y[..., cols] - oy) ** 2
             hit |= (d2 < reach[i] ** 2).any(-1)
             c = np.minimum(c, np.sqrt(d2.min(-1)) - reach[i])
+        return hit, c
+
+    return check
+
+
+def expand(world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, cap: float) -> Lattice:
+    """Expand the lattice from ``pose`` in ``world`` for ``horizon`` steps (the simulator's geometry)."""
+    check = disc_check(world.obstacles, world.wall_y, world.config.robot_radius, cap)
+    return expand_with(check, library, pose, horizon)
+
+
+def expand_with(check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int) -> Lattice:
+    """Expand the lattice from ``pose`` for ``horizon`` steps, each edge judged by ``check``.
+
+    The one search routine: the oracle and the survival labels judge edges with the simulator's
+    geometry (:func:`disc_check`), the mapping planner with its map.
+    """
+    pose = np.asarray(pose, float)
+    if abs(pose[2]) >= 1e-9:
+        raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]}")
+    adv, h = lattice_step(library)
+    local, offsets, n = library.local_paths, library.offsets, library.n
+    states = [np.array([0])]
+    feasible, clear, nxt = [], [], []
+    for k in range(horizon):
+        J = states[k]
+        y0 = pose[1] + k * offsets[0] + J * h
+        X = pose[0] + k * adv + local[:, :, 0]  # (n, S)
+        Y = y0[:, None, None] + local[None, :, :, 1]  # (nJ, n, S)
+        hit, c = check(X, Y)
         feasible.append(~hit)
         clear.append(c)
         targets = J[:, None] + np.arange(n)[None]

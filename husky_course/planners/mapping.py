@@ -1,0 +1,154 @@
+"""The classical mapping planner: remember what every image showed, plan over it exactly.
+
+No learning and no privileged input. The robot keeps an obstacle *map* in its own frame: the
+points of every depth scan it has taken (:class:`~husky_course.planners.perception.DepthScan`),
+moved after each step by the known motion of the primitive it applied (dead reckoning from the
+library, never the true pose). Before every decision it plans over the map with the oracle's own
+lattice search (:func:`husky_course.sim.lattice.expand_with`, :func:`~husky_course.sim.lattice.rank_plans`)
+and applies the first primitive of the best plan (receding horizon).
+
+Choices, and why:
+
+* **Edges are judged on a clearance grid.** Each map point stamps its distance onto a grid of
+  ``resolution`` metres around the robot, up to ``robot_radius + cap`` (no plan cares about more);
+  an edge touches when a sample of it comes within ``robot_radius + margin`` of a point. The
+  margin covers the grid's rounding (half a cell diagonal) and the gaps between the scan's columns
+  (a few centimetres at the distances that matter); it is the map-noise allowance.
+* **Unknown space is free.** A column that saw nothing within ``far`` adds no point, and nothing
+  is known beyond it; the planner replans after every image, so optimism about unseen space costs
+  one step of look-ahead, not a collision, as long as the horizon stays within what the camera sees
+  (``horizon`` primitives, about ``far``).
+* **Walls are points like any obstacle.** Dead reckoning gives the robot its displacement, not its
+  place in the course, so it avoids the side walls only where it has seen them.
+* **Forgetting.** Points fall behind the robot as it advances; those further behind than any
+  primitive can reach are dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import SimConfig
+from ..sim.lattice import expand_with, rank_plans
+from .base import EpisodeStart, Planner
+from .perception import DepthScan
+
+
+class ClearanceGrid:
+    """Distance (m) from grid cells to the nearest map point, capped at ``reach``.
+
+    The grid covers ``x in [x0, x1]``, ``y in [-y1, y1]`` (robot frame) at ``resolution``.
+    """
+
+    def __init__(self, points: np.ndarray, x0: float, x1: float, y1: float, resolution: float, reach: float):
+        self.x0, self.y0, self.res, self.reach = x0, -y1, resolution, reach
+        nx, ny = int(np.ceil((x1 - x0) / resolution)) + 1, int(np.ceil(2 * y1 / resolution)) + 1
+        grid = np.full((nx, ny), reach)
+        k = int(np.ceil(reach / resolution))
+        off = np.arange(-k, k + 1)
+        dx, dy = np.meshgrid(off, off, indexing="ij")
+        stamp_d = np.hypot(dx, dy).ravel() * resolution
+        keep = stamp_d < reach
+        sdx, sdy, sd = dx.ravel()[keep], dy.ravel()[keep], stamp_d[keep]
+        ix = np.rint((points[:, 0] - x0) / resolution).astype(int)
+        iy = np.rint((points[:, 1] - self.y0) / resolution).astype(int)
+        inside = (ix > -k) & (ix < nx + k) & (iy > -k) & (iy < ny + k)
+        if inside.any():
+            cx = (ix[inside, None] + sdx[None]).ravel()
+            cy = (iy[inside, None] + sdy[None]).ravel()
+            # distance from the cell centre to the point itself (not to its own cell's centre)
+            px = np.repeat(points[inside, 0], len(sd))
+            py = np.repeat(points[inside, 1], len(sd))
+            ok = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny)
+            cx, cy, px, py = cx[ok], cy[ok], px[ok], py[ok]
+            d = np.hypot(x0 + cx * resolution - px, self.y0 + cy * resolution - py)
+            np.minimum.at(grid, (cx, cy), np.minimum(d, reach))
+        self.grid = grid
+
+    def __call__(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Clearance at positions ``x``, ``y`` (nearest cell; outside the grid: ``reach``)."""
+        ix = np.rint((x - self.x0) / self.res).astype(int)
+        iy = np.rint((y - self.y0) / self.res).astype(int)
+        nx, ny = self.grid.shape
+        inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+        out = np.full(np.broadcast(ix, iy).shape, self.reach)
+        ix, iy, inside = np.broadcast_arrays(ix, iy, inside)
+        out[inside] = self.grid[ix[inside], iy[inside]]
+        return out
+
+
+class MappingPlanner(Planner):
+    """Egocentric map of every scan so far + the oracle's lattice search over it (module docstring)."""
+
+    name = "mapping"
+
+    def __init__(
+        self,
+        config: SimConfig | None = None,
+        horizon: int = 4,
+        cap: float = 0.3,
+        quantum: float = 0.02,
+        margin: float = 0.05,
+        resolution: float = 0.025,
+        path_samples: int = 21,
+    ) -> None:
+        super().__init__()
+        cfg = config or SimConfig()
+        self.config, self.horizon, self.cap, self.quantum = cfg, int(horizon), float(cap), float(quantum)
+        self.margin, self.resolution = float(margin), float(resolution)
+        self.radius = cfg.world.robot_radius
+        self.scan = DepthScan(cfg)
+        prim = cfg.primitives
+        self.advance, self.spread = prim.advance, prim.lateral_spread
+        self.path_samples = int(path_samples)
+        self.points = np.empty((0, 2))
+        self._library = None
+        self._remaining = 0
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self.points = np.empty((0, 2))
+        self._library = start.library
+        self._remaining = start.max_primitives
+
+    def _check(self, grid: ClearanceGrid):
+        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
+
+        def check(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            x, y = X[:, ::every], Y[..., ::every]
+            clear = grid(np.broadcast_to(x, y.shape), y).min(-1) - self.radius
+            return clear < self.margin, clear - self.margin
+
+        return check
+
+    def plan(self, obs: np.ndarray) -> tuple[int, np.ndarray]:
+        """Add ``obs``'s scan to the map; return the best first primitive and every first primitive's rank."""
+        if self._library is None:
+            raise RuntimeError("call reset(start) before act()")
+        self.points = np.concatenate([self.scan(obs), self.points])
+        horizon = max(1, min(self.horizon, self._remaining))
+        reach = self.radius + self.margin + self.cap
+        grid = ClearanceGrid(
+            self.points,
+            x0=-reach,
+            x1=horizon * self.advance + reach,
+            y1=horizon * self.spread + reach,
+            resolution=self.resolution,
+            reach=reach,
+        )
+        lattice = expand_with(self._check(grid), self._library, np.zeros(3), horizon)
+        ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
+        return int(ranking.choice[0][0]), ranking.keys[0][0]
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        action, keys = self.plan(obs)
+        self.last_scores = -(keys - keys.max()) / 1e6  # 0 for the best; +1 per safe step fewer
+        return action
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        """Dead reckoning: move the map into the frame after ``action``; forget what is far behind."""
+        assert self._library is not None
+        end = self._library.local_paths[action, -1]
+        moved = self.points - end[:2]
+        self.points = moved[moved[:, 0] > -(self.radius + self.margin + self.cap + self.advance)]
+        self._remaining -= 1
