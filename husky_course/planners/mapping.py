@@ -7,7 +7,10 @@ library, never the true pose). Before every decision it plans over the map with 
 lattice search (:func:`husky_course.sim.lattice.expand_with`, :func:`~husky_course.sim.lattice.rank_plans`)
 and applies the first primitive of the best plan (receding horizon).
 
-Choices, and why:
+Choices, and why (``horizon`` and ``margin`` were chosen on evaluation set 1, the tuning set:
+success on 200 worlds 0.84 / 0.89 / 0.905 / 0.905 / 0.905 for horizons 3 / 4 / 5 / 6 / 8, and the
+margin of 0.02 m over 0.05 and 0.08; an extra "unseen back of the obstacle" disc behind every scan
+point made it worse, 0.88 and 0.85, by closing gaps):
 
 * **Edges are judged on a clearance grid.** Each map point stamps its distance onto a grid of
   ``resolution`` metres around the robot, up to ``robot_radius + cap`` (no plan cares about more);
@@ -85,10 +88,10 @@ class MappingPlanner(Planner):
     def __init__(
         self,
         config: SimConfig | None = None,
-        horizon: int = 4,
+        horizon: int = 5,
         cap: float = 0.3,
         quantum: float = 0.02,
-        margin: float = 0.05,
+        margin: float = 0.02,
         resolution: float = 0.025,
         path_samples: int = 21,
     ) -> None:
