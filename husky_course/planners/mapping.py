@@ -34,11 +34,11 @@ import numpy as np
 from ..config import SimConfig
 from ..sim.lattice import expand_with, rank_plans
 from .base import EpisodeStart, Planner
-from .perception import DepthScan
+from .perception import DepthScan, EgoMap
 
 
 class ClearanceGrid:
-    """Distance (m) from grid cells to the nearest map point, capped at ``reach``.
+    """Distance (m) from grid cells to the nearest map point's disc ``(x, y, r)``, capped at ``reach``.
 
     The grid covers ``x in [x0, x1]``, ``y in [-y1, y1]`` (robot frame) at ``resolution``.
     """
@@ -47,11 +47,12 @@ class ClearanceGrid:
         self.x0, self.y0, self.res, self.reach = x0, -y1, resolution, reach
         nx, ny = int(np.ceil((x1 - x0) / resolution)) + 1, int(np.ceil(2 * y1 / resolution)) + 1
         grid = np.full((nx, ny), reach)
-        k = int(np.ceil(reach / resolution))
+        points = np.asarray(points, float).reshape(-1, 3)
+        k = int(np.ceil((reach + (points[:, 2].max() if len(points) else 0.0)) / resolution))
         off = np.arange(-k, k + 1)
         dx, dy = np.meshgrid(off, off, indexing="ij")
         stamp_d = np.hypot(dx, dy).ravel() * resolution
-        keep = stamp_d < reach
+        keep = stamp_d < k * resolution
         sdx, sdy, sd = dx.ravel()[keep], dy.ravel()[keep], stamp_d[keep]
         ix = np.rint((points[:, 0] - x0) / resolution).astype(int)
         iy = np.rint((points[:, 1] - self.y0) / resolution).astype(int)
@@ -62,9 +63,10 @@ class ClearanceGrid:
             # distance from the cell centre to the point itself (not to its own cell's centre)
             px = np.repeat(points[inside, 0], len(sd))
             py = np.repeat(points[inside, 1], len(sd))
+            pr = np.repeat(points[inside, 2], len(sd))
             ok = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny)
-            cx, cy, px, py = cx[ok], cy[ok], px[ok], py[ok]
-            d = np.hypot(x0 + cx * resolution - px, self.y0 + cy * resolution - py)
+            cx, cy, px, py, pr = cx[ok], cy[ok], px[ok], py[ok], pr[ok]
+            d = np.hypot(x0 + cx * resolution - px, self.y0 + cy * resolution - py) - pr
             np.minimum.at(grid, (cx, cy), np.minimum(d, reach))
         self.grid = grid
 
@@ -100,17 +102,21 @@ class MappingPlanner(Planner):
         self.config, self.horizon, self.cap, self.quantum = cfg, int(horizon), float(cap), float(quantum)
         self.margin, self.resolution = float(margin), float(resolution)
         self.radius = cfg.world.robot_radius
-        self.scan = DepthScan(cfg)
         prim = cfg.primitives
         self.advance, self.spread = prim.advance, prim.lateral_spread
+        self.map = EgoMap(DepthScan(cfg), forget_behind=self.radius + self.margin + self.cap + self.advance)
         self.path_samples = int(path_samples)
-        self.points = np.empty((0, 2))
         self._library = None
         self._remaining = 0
 
+    @property
+    def points(self) -> np.ndarray:
+        """The map: points ``(x, y, r)`` in the robot's frame."""
+        return self.map.points
+
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
-        self.points = np.empty((0, 2))
+        self.map.reset()
         self._library = start.library
         self._remaining = start.max_primitives
 
@@ -128,7 +134,7 @@ class MappingPlanner(Planner):
         """Add ``obs``'s scan to the map; return the best first primitive and every first primitive's rank."""
         if self._library is None:
             raise RuntimeError("call reset(start) before act()")
-        self.points = np.concatenate([self.scan(obs), self.points])
+        self.map.add(obs)
         horizon = max(1, min(self.horizon, self._remaining))
         reach = self.radius + self.margin + self.cap
         grid = ClearanceGrid(
@@ -152,6 +158,5 @@ class MappingPlanner(Planner):
         """Dead reckoning: move the map into the frame after ``action``; forget what is far behind."""
         assert self._library is not None
         end = self._library.local_paths[action, -1]
-        moved = self.points - end[:2]
-        self.points = moved[moved[:, 0] > -(self.radius + self.margin + self.cap + self.advance)]
+        self.map.move(float(end[0]), float(end[1]))
         self._remaining -= 1

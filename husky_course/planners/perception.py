@@ -33,9 +33,62 @@ class DepthScan:
         rows = np.flatnonzero((ground >= cam.far) & (top >= cam.far))
         self.rows = rows if rows.size else np.array([cam.size // 2])
 
-    def __call__(self, obs: np.ndarray) -> np.ndarray:
+    def columns(self, obs: np.ndarray) -> np.ndarray:
+        """View-axis depth (m) of the nearest vertical surface per column, ``inf`` where none is seen."""
         cam = self.camera
         col = np.median(check_observation(obs, cam.size)[self.rows], axis=0)
-        seen = col < NOTHING_SEEN
-        d = denormalize_depth(col[seen], cam)
-        return np.stack([cam.mount_forward + d, d * self.u[seen]], axis=1)
+        return np.where(col < NOTHING_SEEN, denormalize_depth(col, cam), np.inf)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        d = self.columns(obs)
+        seen = np.isfinite(d)
+        return np.stack([self.camera.mount_forward + d[seen], d[seen] * self.u[seen]], axis=1)
+
+
+class EgoMap:
+    """Obstacle points ``(x, y, r)`` in the robot's frame, from every scan so far (no privileged input).
+
+    * :meth:`add` puts in the points of a new image, each with an uncertainty radius ``r`` of half
+      the gap between neighbouring columns at its distance (a surface can hide between two
+      columns), and drops remembered points that the new image sees again or sees through (inside
+      the field of view and in front of that column's depth): where the camera looks now, the
+      current image is the truth, and memory keeps what it cannot see (beside and behind the robot,
+      or occluded);
+    * :meth:`move` is dead reckoning: after a primitive that ended at ``(dx, dy)`` with heading 0
+      (every primitive does), the points move by ``(-dx, -dy)``; points further behind than
+      ``forget_behind`` are dropped.
+    """
+
+    def __init__(self, scan: DepthScan, forget_behind: float) -> None:
+        self.scan, self.forget_behind = scan, float(forget_behind)
+        cam = scan.camera
+        self._t = float(scan.u[0])  # tangent of half the field of view
+        self._half_gap = self._t / cam.size  # half the tangent step between two columns
+        self.points = np.empty((0, 3))
+
+    def reset(self) -> None:
+        """Forget everything (a new episode)."""
+        self.points = np.empty((0, 3))
+
+    def add(self, obs: np.ndarray) -> None:
+        """Merge the scan of ``obs`` into the map (see the class docstring)."""
+        cam = self.scan.camera
+        d = self.scan.columns(obs)
+        if len(self.points):
+            dx = self.points[:, 0] - cam.mount_forward
+            with np.errstate(divide="ignore", invalid="ignore"):
+                u = np.where(dx > cam.near, self.points[:, 1] / dx, np.inf)
+            col = np.where(np.isfinite(u), (self._t - u) * cam.size / (2 * self._t), -1.0)
+            j = np.floor(col + 0.5).astype(int)
+            in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
+            seen_again = in_view & (dx < d[np.clip(j, 0, cam.size - 1)] + self.points[:, 2] + 0.05)
+            self.points = self.points[~seen_again]
+        seen = np.isfinite(d)
+        ds, us = d[seen], self.scan.u[seen]
+        new = np.stack([cam.mount_forward + ds, ds * us, ds * self._half_gap], axis=1)
+        self.points = np.concatenate([new, self.points])
+
+    def move(self, dx: float, dy: float) -> None:
+        """Dead reckoning after a primitive that moved the robot by ``(dx, dy)`` (heading unchanged)."""
+        moved = self.points - np.array([dx, dy, 0.0])
+        self.points = moved[moved[:, 0] > -self.forget_behind]
