@@ -83,6 +83,7 @@ TRAINABLE = (
     "diagnosis",
     "rnn",
     "distilled",
+    "memory",
 )
 
 
@@ -95,6 +96,16 @@ def _train(args: argparse.Namespace) -> dict:
     progress = not args.no_progress
     out = {}
     for name in TRAINABLE if args.model == "all" else (args.model,):
+        if name == "memory":  # chapter 8's student: DAgger rounds from the oracle
+            from .imitation.dagger import get_memory
+
+            student = get_memory(profile, progress)
+            out[name] = {
+                "best_val_loss": student.history.best_val,
+                "rounds": student.rounds,
+                "path": student.path,
+            }
+            continue
         if name == "diagnosis":  # chapter 4's variants and probes: many small runs, one JSON
             found = get_diagnosis(profile, progress)
             out[name] = {

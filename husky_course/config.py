@@ -198,6 +198,35 @@ class TrainingPlan:
 
 
 @dataclass(frozen=True)
+class OracleConfig:
+    """How the oracle ranks plans of equal length (see :func:`husky_course.sim.lattice.rank_plans`)."""
+
+    cap: float = 0.3  #: clearance (m) above which plans are not told apart
+    quantum: float = 0.02  #: clearance is compared in bins of this size (m)
+
+
+@dataclass(frozen=True)
+class MemoryConfig:
+    """The memory student (chapter 8): its map input and its DAgger training.
+
+    The student sees the current depth image and an egocentric occupancy map rasterised from every
+    scan so far (moved by dead reckoning); the teacher is the oracle's lattice search on the true
+    world. Training worlds come from collection seed ``collection_seed`` (a seed no dataset or
+    calibration uses), so none is an evaluation world.
+    """
+
+    map_cells: int = 32  #: the map raster is map_cells x map_cells
+    map_ahead: float = 5.4  #: the raster covers x in [-map_behind, map_ahead] (m, robot frame) ...
+    map_behind: float = 1.0
+    map_half_width: float = 3.2  #: ... and y in [-map_half_width, map_half_width]
+    label_horizon: int = 5  #: survival labels over this many steps (the simulator's lattice search)
+    rounds: int = 3  #: round 0 follows the teacher, later rounds the student (DAgger)
+    worlds_per_round: int = 1500
+    collection_seed: int = 2
+    train: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=15, patience=3))
+
+
+@dataclass(frozen=True)
 class EvalPlan:
     """How many held-out worlds the planning chapters evaluate on."""
 
@@ -216,6 +245,7 @@ class Profile:
     eval: EvalPlan = field(default_factory=EvalPlan)
     model: ModelConfig = field(default_factory=ModelConfig)
     calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
+    memory: MemoryConfig = field(default_factory=MemoryConfig)
 
     @property
     def dims(self) -> ModelDims:
@@ -240,6 +270,7 @@ def _profiles() -> dict[str, Profile]:
             ),
             EvalPlan(worlds=60),
             calibration=CalibrationConfig(videos=500),
+            memory=MemoryConfig(worlds_per_round=300, train=TrainConfig(epochs=10, patience=3)),
         ),
         "full": Profile("full", sim, DataConfig(videos=10_000)),
     }
@@ -302,7 +333,9 @@ __all__ = [
     "ConfigError",
     "DataConfig",
     "EvalPlan",
+    "MemoryConfig",
     "ModelConfig",
+    "OracleConfig",
     "ModelDims",
     "PrimitiveConfig",
     "Profile",

@@ -2,7 +2,7 @@
 
 Stages, lowest first (a module may import from its own stage or a lower one, never a higher one):
 the floor (``config``, ``checks``, ``progress``) -> ``sim`` -> ``data`` -> ``models`` ->
-``training`` -> ``planners`` -> ``evaluation`` -> ``course`` / ``ui`` -> ``cli``.
+``training`` -> ``planners`` -> ``imitation`` -> ``evaluation`` -> ``course`` / ``ui`` -> ``cli``.
 """
 
 from __future__ import annotations
@@ -28,11 +28,12 @@ STAGES = {
     "models": 3,
     "training": 4,
     "planners": 5,
-    "evaluation": 6,
-    "course": 7,
-    "ui": 7,
-    "cli": 8,
-    "__main__": 9,
+    "imitation": 6,
+    "evaluation": 7,
+    "course": 8,
+    "ui": 8,
+    "cli": 9,
+    "__main__": 10,
 }
 MAX_LINES = 400
 

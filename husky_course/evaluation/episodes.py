@@ -16,7 +16,7 @@ import numpy as np
 
 from ..checks import check_int, is_int
 from ..config import EVAL_SEED_BASE
-from ..planners.base import EpisodeStart, Planner, episode_key
+from ..planners.base import Planner, episode_start
 from ..progress import tqdm
 from ..sim.backends import make_simulator
 from ..sim.base import Simulator
@@ -76,23 +76,6 @@ class Episode:
     reset_time: float = 0.0
     observations: list[np.ndarray] = field(default_factory=list)  #: with ``record=True``: image per step
     scores: list[np.ndarray | None] = field(default_factory=list)  #: with ``record=True``: planner scores
-
-
-def episode_start(
-    planner: Planner, sim: Simulator, world_seed: int, pose: np.ndarray, max_primitives: int
-) -> EpisodeStart:
-    """What ``planner`` may know at the start of an episode in ``sim``'s loaded world at ``pose``.
-
-    The simulator and the pose go to privileged planners (the oracle) only.
-    """
-    privileged = planner.privileged
-    return EpisodeStart(
-        library=sim.library,
-        max_primitives=int(max_primitives),
-        key=episode_key(int(world_seed)),
-        sim=sim if privileged else None,
-        pose=np.array(pose, float) if privileged else None,
-    )
 
 
 def run_episode(

@@ -93,6 +93,23 @@ class EpisodeStart:
     pose: np.ndarray | None = None
 
 
+def episode_start(
+    planner: Planner, sim: Simulator, world_seed: int, pose: np.ndarray, max_primitives: int
+) -> EpisodeStart:
+    """What ``planner`` may know at the start of an episode in ``sim``'s loaded world at ``pose``.
+
+    The simulator and the pose go to privileged planners (the oracle) only.
+    """
+    privileged = planner.privileged
+    return EpisodeStart(
+        library=sim.library,
+        max_primitives=int(max_primitives),
+        key=episode_key(int(world_seed)),
+        sim=sim if privileged else None,
+        pose=np.array(pose, float) if privileged else None,
+    )
+
+
 class Planner:
     """Base class. Subclasses implement :meth:`act` and may override :meth:`reset`/:meth:`observe`."""
 
@@ -113,3 +130,12 @@ class Planner:
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
         """Hook called after each step with the next image (``None`` after a collision)."""
+
+
+def survival_scores(s: np.ndarray, smooth: int) -> np.ndarray:
+    """Scores (lower is better) from predicted survival ``s``: survive longest, and among ties take
+    the middle of the widest free corridor (neighbours within ``smooth`` also predicted safe)."""
+    k = 2 * smooth + 1
+    padded = np.pad(s, smooth, mode="constant", constant_values=0.0)
+    neighbourhood = np.convolve(padded, np.ones(k) / k, mode="valid")
+    return -(s + 0.5 * neighbourhood)

@@ -41,8 +41,9 @@ from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
 from ..training.inference import single_thread
+from ..training.memory import load_memory
 from ..training.trainer import CheckpointError
-from .base import Planner, PlannerError, check_look_ahead, check_observation
+from .base import Planner, PlannerError, check_look_ahead, check_observation, survival_scores
 
 REWARDS = ("applied", "next_image")
 
@@ -182,15 +183,12 @@ class DistilledPlanner(Planner):
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         with single_thread():
             s = self.model.survival(_image(obs, self.model.encoder.size))[0].numpy()
-        k = 2 * self.smooth + 1
-        padded = np.pad(s, self.smooth, mode="constant", constant_values=0.0)
-        neighbourhood = np.convolve(padded, np.ones(k) / k, mode="valid")
-        self.last_scores = -(s + 0.5 * neighbourhood)
+        self.last_scores = survival_scores(s, self.smooth)
         return int(np.argmin(self.last_scores))
 
 
 #: learned planner -> the model it runs on
-MODEL_OF = {"lookahead": "joint", "rnn": "rnn", "distilled": "distilled"}
+MODEL_OF = {"lookahead": "joint", "rnn": "rnn", "distilled": "distilled", "memory": "memory"}
 
 
 def make_learned_planner(
@@ -199,12 +197,17 @@ def make_learned_planner(
     """Build a learned planner from the profile's checkpoints.
 
     With ``train=False`` (the CLI's default) nothing is built: a missing checkpoint is an error
-    naming the command that trains it. ``train=True`` builds what is missing (with progress bars).
+    naming the command that trains it. ``train=True`` builds what is missing (with progress bars),
+    except the memory student, which DAgger trains (:func:`husky_course.imitation.dagger.get_memory`).
     """
     check_look_ahead(look_ahead)
     if name not in MODEL_OF:
         raise PlannerError(f"{name!r} is not a learned planner: choose one of {', '.join(MODEL_OF)}")
     try:
+        if name == "memory":  # trained by DAgger, above the planners: here it is only loaded
+            from .memory import MemoryPlanner
+
+            return MemoryPlanner(load_memory(profile)[0], profile.sim, profile.memory, **kwargs)
         if train:
             model = builders.BUILDERS[MODEL_OF[name]](profile, True).model
         else:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config import OracleConfig
 from ..sim.base import Simulator
 from ..sim.lattice import LatticeError, Ranking, expand, rank_plans
 from .base import EpisodeStart, Planner, PlannerError, check_observation
@@ -32,7 +33,9 @@ class OraclePlanner(Planner):
     name = "oracle"
     privileged = True
 
-    def __init__(self, cap: float = 0.3, quantum: float = 0.02, horizon: int | None = None) -> None:
+    def __init__(
+        self, cap: float = OracleConfig.cap, quantum: float = OracleConfig.quantum, horizon: int | None = None
+    ) -> None:
         super().__init__()
         self.cap, self.quantum, self.horizon = float(cap), float(quantum), horizon
         self.crossable = False

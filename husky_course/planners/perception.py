@@ -88,6 +88,22 @@ class EgoMap:
         new = np.stack([cam.mount_forward + ds, ds * us, ds * self._half_gap], axis=1)
         self.points = np.concatenate([new, self.points])
 
+    def raster(self, cells: int, behind: float, ahead: float, half_width: float) -> np.ndarray:
+        """The map as a ``(cells, cells)`` occupancy image: row = forward distance, column = lateral.
+
+        Cell ``(i, j)`` is 1 where a map point lies in it: rows cover ``x`` from ``-behind`` (row 0)
+        to ``ahead``, columns ``y`` from ``+half_width`` (column 0, the robot's left) to
+        ``-half_width``, so the image reads like a top-down view with the robot near the bottom.
+        """
+        out = np.zeros((cells, cells), np.float32)
+        if not len(self.points):
+            return out
+        i = np.floor((self.points[:, 0] + behind) / (ahead + behind) * cells).astype(int)
+        j = np.floor((half_width - self.points[:, 1]) / (2 * half_width) * cells).astype(int)
+        ok = (i >= 0) & (i < cells) & (j >= 0) & (j < cells)
+        out[i[ok], j[ok]] = 1.0
+        return out[::-1].copy()  # far rows at the top
+
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)`` (heading unchanged)."""
         moved = self.points - np.array([dx, dy, 0.0])

@@ -14,8 +14,8 @@ from .classic import HeuristicPlanner, RandomPlanner
 from .mapping import MappingPlanner
 from .oracle import OraclePlanner
 
-PLANNERS = ("random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "oracle")
-LEARNED_PLANNERS = ("lookahead", "rnn", "distilled")
+PLANNERS = ("random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "memory", "oracle")
+LEARNED_PLANNERS = ("lookahead", "rnn", "distilled", "memory")
 _CLASSES: dict[str, type[Planner]] = {
     "random": RandomPlanner,
     "heuristic": HeuristicPlanner,

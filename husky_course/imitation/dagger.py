@@ -1,0 +1,179 @@
+"""Training the memory student from a privileged teacher, on its own states (DAgger).
+
+The teacher is the oracle's lattice search on the true world; the student
+(:class:`~husky_course.planners.memory.MemoryPlanner`) sees only images and its own motion. Each
+round:
+
+1. **roll out** in fresh *training* worlds (collection seed ``MemoryConfig.collection_seed``, never
+   an evaluation world): round 0 follows the teacher's actions, later rounds the student's own, so
+   the data covers the states the student actually reaches, mistakes included;
+2. **record** at every visited state the student's inputs (the depth image and its map raster) and,
+   for the labels only, the true world and pose;
+3. **label** every state with the simulator's survival of each primitive over
+   ``MemoryConfig.label_horizon`` steps (:func:`husky_course.data.labels.survival_at`);
+4. **aggregate** with every earlier round and **retrain** the network from its seeded start.
+
+Every round's data (``round_<r>.npz``) and network (``round_<r>/model.pt``, resumable per epoch)
+are artifacts under ``artifacts/<profile>/models/memory-<hash>/``; a killed run resumes at the
+first missing piece and ends with the same bytes. ``model.pt`` there is the last round's network.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ..config import Profile
+from ..data.collect import world_seed_for
+from ..data.io import DatasetError, atomic_write_bytes
+from ..data.labels import survival_at
+from ..data.store import runs_dir
+from ..models.memory import MemoryNet
+from ..planners.base import episode_start
+from ..planners.memory import MemoryPlanner
+from ..planners.oracle import OraclePlanner
+from ..progress import tqdm
+from ..sim.fast import FastSimulator
+from ..training.memory import final_fingerprint, memory_dir, memory_fingerprint, new_memory_net
+from ..training.trainer import History, fit, save_model
+
+ROLLOUT_KEYS = ("image", "map", "world_seed", "pose")
+
+
+@dataclass
+class Student:
+    """The trained memory student, its history and where it is stored."""
+
+    model: MemoryNet
+    history: History
+    path: str
+    fingerprint: dict
+    rounds: list[dict]  #: per round: states added, teacher or student, student's success in its worlds
+
+
+def round_worlds(profile: Profile, r: int) -> np.ndarray:
+    """World seeds of round ``r``: videos ``r * worlds_per_round + [0, worlds_per_round)`` of the seed."""
+    mem = profile.memory
+    videos = range(r * mem.worlds_per_round, (r + 1) * mem.worlds_per_round)
+    return np.array([world_seed_for(mem.collection_seed, v) for v in videos])
+
+
+def rollouts(
+    student: MemoryPlanner, seeds: np.ndarray, teacher: bool, profile: Profile, progress: bool = False
+) -> tuple[dict[str, np.ndarray], float]:
+    """Roll out in each world of ``seeds``; return every visited state and the success rate.
+
+    With ``teacher`` the oracle's actions are applied (the student only builds its map along the
+    way); otherwise the student's own.
+    """
+    sim = FastSimulator(profile.sim)
+    limit = profile.sim.max_primitives
+    oracle = OraclePlanner()
+    out: dict[str, list] = {k: [] for k in ROLLOUT_KEYS}
+    successes = 0
+    desc = "rollouts (teacher)" if teacher else "rollouts (student)"
+    for seed in tqdm(seeds, desc=desc, disable=not progress):
+        world = sim.load(int(seed))
+        pose = world.start.copy()
+        student.reset(episode_start(student, sim, int(seed), pose, limit))
+        if teacher:
+            oracle.reset(episode_start(oracle, sim, int(seed), pose, limit))
+        obs = sim.depth(pose[None])[0]
+        collided = False
+        for _ in range(limit):
+            image, grid = student.prepare(obs)
+            out["image"].append(image.astype(np.float16))
+            out["map"].append(grid.astype(np.uint8))
+            out["world_seed"].append(int(seed))
+            out["pose"].append(pose.copy())
+            action = oracle.act(obs, pose.copy()) if teacher else student.choose(image, grid)
+            result = sim.apply(pose, action)
+            student.observe(action, None)
+            pose = result.pose
+            if result.collided:
+                collided = True
+                break
+            obs = sim.depth(pose[None])[0]
+        successes += not collided
+    arrays = {
+        "image": np.asarray(out["image"], np.float16),
+        "map": np.asarray(out["map"], np.uint8),
+        "world_seed": np.asarray(out["world_seed"], np.int64),
+        "pose": np.asarray(out["pose"], np.float64),
+    }
+    return arrays, successes / max(len(seeds), 1)
+
+
+def _save_round(path: Path, data: dict[str, np.ndarray]) -> None:
+    buf = io.BytesIO()
+    np.savez(buf, **data)
+    atomic_write_bytes(path, buf.getvalue())
+
+
+def _load_round(path: Path) -> dict[str, np.ndarray]:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except Exception as exc:  # a truncated or foreign file
+        raise DatasetError(f"{path} is truncated or corrupted ({exc}); delete it and rerun") from exc
+
+
+def _tensors(data: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, torch.Tensor]:
+    t = torch.from_numpy(rows)
+    return {
+        "image": torch.from_numpy(data["image"])[t],
+        "map": torch.from_numpy(data["map"])[t],
+        "survival": torch.from_numpy(data["survival"])[t],
+    }
+
+
+def get_memory(profile: Profile, progress: bool = True) -> Student:
+    """The memory student, trained by DAgger (or loaded); every round is a resumable artifact."""
+    mem = profile.memory
+    fp = memory_fingerprint(profile)
+    run = memory_dir(profile)
+    run.mkdir(parents=True, exist_ok=True)
+    rounds: list[dict] = []
+    parts: list[dict[str, np.ndarray]] = []
+    model: MemoryNet | None = None
+    history = History()
+    for r in range(mem.rounds):
+        path = run / f"round_{r}.npz"
+        if not path.is_file():
+            student = MemoryPlanner(model, profile.sim, mem)
+            data, success = rollouts(student, round_worlds(profile, r), r == 0, profile, progress)
+            data["survival"] = survival_at(
+                data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress
+            )
+            data["success"] = np.array([success])
+            _save_round(path, data)
+        data = _load_round(path)
+        rounds.append(
+            {"round": r, "acting": "teacher" if r == 0 else "student", "states": len(data["pose"]),
+             "success_in_its_worlds": float(data["success"][0])}
+        )
+        parts.append(data)
+        agg = {k: np.concatenate([p[k] for p in parts]) for k in ("image", "map", "survival", "world_seed")}
+        in_val = agg["world_seed"] % 10 == 0  # one world in ten validates, whatever the round
+        model = new_memory_net(profile)
+        round_fp = {**fp, "round": r}
+        history = fit(
+            model,
+            _tensors(agg, np.flatnonzero(~in_val)),
+            _tensors(agg, np.flatnonzero(in_val)),
+            mem.train,
+            run_dir=run / f"round_{r}",
+            fingerprint=round_fp,
+            log_dir=runs_dir(f"memory-round{r}", round_fp, profile),
+            progress=progress,
+            desc=f"memory round {r}",
+        )
+    assert model is not None, "MemoryConfig.rounds must be >= 1"
+    final = run / "model.pt"
+    if not final.is_file():
+        save_model(final, model, final_fingerprint(profile), history)
+    return Student(model, history, str(final), fp, rounds)

@@ -1,0 +1,62 @@
+"""The memory student's network: the current depth image and a map of everything seen so far.
+
+Two inputs, one output per primitive:
+
+* the current depth image through the paper's :class:`~husky_course.models.paper.Encoder` (the
+  perception the course has studied since chapter 3), giving the latent;
+* the egocentric occupancy map (:meth:`husky_course.planners.perception.EgoMap.raster`), a small
+  image of every obstacle point seen so far in the robot's frame, through two convolutions;
+
+concatenated and mapped to the predicted steps (out of ``horizon``) that the best continuation
+starting with each primitive survives, the oracle's own survival labels. Memory lives in the map,
+not in a recurrent state: the map is what lets a planner remember an obstacle beside the robot,
+and it costs one small convolution per decision.
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor, nn
+
+from ..config import ModelDims
+from .base import DEFAULT_DIMS, make_spec, mlp
+from .paper import Encoder
+
+
+class MemoryNet(nn.Module):
+    """Encoder(depth) + CNN(map) -> survival of every primitive (see the module docstring)."""
+
+    HIDDEN = (16, 32, 64)  #: map channels, map channels, joint hidden width
+
+    def __init__(self, horizon: int, map_cells: int, dims: ModelDims = DEFAULT_DIMS) -> None:
+        super().__init__()
+        c1, c2, hidden = self.HIDDEN
+        self.spec = make_spec("memory", dims, (*self.HIDDEN, map_cells, horizon))
+        self.horizon, self.map_cells = int(horizon), int(map_cells)
+        self.encoder = Encoder(dims)
+        self.map_net = nn.Sequential(
+            nn.Conv2d(1, c1, kernel_size=5, stride=2, padding=2),
+            nn.ELU(),
+            nn.Conv2d(c1, c2, kernel_size=3, stride=2, padding=1),
+            nn.ELU(),
+            nn.Flatten(),
+        )
+        side = (map_cells + 1) // 2
+        side = (side + 1) // 2
+        self.head = mlp([dims.latent + c2 * side * side, hidden, hidden, dims.n_primitives])
+
+    def logits(self, image: Tensor, grid: Tensor) -> Tensor:
+        """Pre-sigmoid survival fractions ``(B, n_primitives)``."""
+        if grid.dim() == 3:
+            grid = grid.unsqueeze(1)
+        return self.head(torch.cat([self.encoder(image), self.map_net(grid.float())], dim=1))
+
+    def survival(self, image: Tensor, grid: Tensor) -> Tensor:
+        """Predicted steps survived ``(B, n_primitives)`` in ``[0, horizon]``."""
+        return torch.sigmoid(self.logits(image, grid)) * self.horizon
+
+    def loss(self, batch: dict[str, Tensor]) -> Tensor:
+        """BCE between the predicted and the simulator's survival fraction, every primitive."""
+        target = batch["survival"].float() / self.horizon
+        return F.binary_cross_entropy_with_logits(self.logits(batch["image"], batch["map"]), target)

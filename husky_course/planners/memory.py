@@ -1,0 +1,79 @@
+"""The memory student: a learned planner that remembers what earlier images showed.
+
+It sees what every unprivileged planner sees (depth images, the primitives it applied, its own
+library). It keeps the mapping planner's egocentric map (:class:`~husky_course.planners.perception.EgoMap`),
+rasterises it, and lets :class:`~husky_course.models.memory.MemoryNet` predict how long the best
+continuation starting with each primitive survives; it applies the primitive predicted to survive
+longest (:func:`~husky_course.planners.base.survival_scores`). The network is trained by
+:mod:`husky_course.training.dagger` from the oracle as a privileged teacher.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from ..config import MemoryConfig, SimConfig
+from ..models.memory import MemoryNet
+from ..training.inference import single_thread
+from .base import EpisodeStart, Planner, check_observation, survival_scores
+from .perception import DepthScan, EgoMap
+
+
+class MemoryPlanner(Planner):
+    """The memory student (see the module docstring).
+
+    ``prepare`` / ``choose`` / ``observe`` split one decision so the DAgger driver can record the
+    student's inputs and let the teacher act instead (round 0).
+    """
+
+    name = "memory"
+
+    def __init__(
+        self,
+        model: MemoryNet | None,
+        config: SimConfig | None = None,
+        memory: MemoryConfig | None = None,
+        smooth: int = 2,
+    ) -> None:
+        super().__init__()
+        self.model = model.eval() if model is not None else None
+        self.config, self.memory = config or SimConfig(), memory or MemoryConfig()
+        cfg, mem = self.config, self.memory
+        self.smooth = int(smooth)
+        self.map = EgoMap(DepthScan(cfg), forget_behind=mem.map_behind)
+        self._library = None
+        self.last_input: tuple[np.ndarray, np.ndarray] | None = None
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self.map.reset()
+        self._library = start.library
+
+    def prepare(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``."""
+        image = check_observation(obs, self.config.camera.size)
+        self.map.add(image)
+        m = self.memory
+        self.last_input = (image, self.map.raster(m.map_cells, m.map_behind, m.map_ahead, m.map_half_width))
+        return self.last_input
+
+    @torch.no_grad()
+    def choose(self, image: np.ndarray, grid: np.ndarray) -> int:
+        """The primitive predicted to survive longest (sets ``last_scores``)."""
+        if self.model is None:
+            raise RuntimeError("this MemoryPlanner has no trained network")
+        with single_thread():
+            s = self.model.survival(torch.from_numpy(image)[None], torch.from_numpy(grid)[None])[0].numpy()
+        self.last_scores = survival_scores(s, self.smooth)
+        return int(np.argmin(self.last_scores))
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        return self.choose(*self.prepare(obs))
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        """Dead reckoning: move the map by the applied primitive's known displacement."""
+        if self._library is None:
+            raise RuntimeError("call reset(start) before observe()")
+        end = self._library.local_paths[action, -1]
+        self.map.move(float(end[0]), float(end[1]))
