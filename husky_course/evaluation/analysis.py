@@ -5,14 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..sim.base import Simulator
+from ..sim.fast import FastSimulator
 from .episodes import Episode
 
 
 def collision_cause(episode: Episode, sim: Simulator) -> str:
     """Why an episode's last primitive collided, seen from the decision pose.
 
-    ``"wall"`` (a side wall), ``"out of view"`` (the obstacle hit was outside the camera's
-    horizontal field of view when the primitive was chosen) or ``"in view"``.
+    ``"wall"`` (a side wall), ``"out of view"`` (the obstacle hit was not rendered by any image
+    column when the primitive was chosen: outside the field of view, hidden behind a nearer one,
+    between two columns or beyond ``far``; :meth:`~husky_course.sim.fast.FastSimulator.visible_obstacles`)
+    or ``"in view"``.
     """
     if not episode.collided:
         raise ValueError("the episode did not collide")
@@ -24,7 +27,6 @@ def collision_cause(episode: Episode, sim: Simulator) -> str:
     if abs(hit_pose[1]) + radius > world.wall_y:
         return "wall"
     gap = np.hypot(*(world.obstacles[:, :2] - hit_pose[:2]).T) - world.obstacles[:, 2] - radius
-    ox, oy = world.obstacles[int(np.argmin(gap)), :2] - decision[:2]
-    bearing = abs(np.degrees(np.arctan2(oy, ox) - decision[2]))
-    half_fov = sim.config.camera.fov_deg / 2.0
-    return "out of view" if bearing > half_fov else "in view"
+    eyes = sim if isinstance(sim, FastSimulator) else FastSimulator(sim.config)
+    eyes.load(world)
+    return "in view" if int(np.argmin(gap)) in eyes.visible_obstacles(decision) else "out of view"

@@ -86,6 +86,17 @@ class FastSimulator(Simulator):
         kind = np.where(t_min < t_wall, 2 + k_obs, np.where(np.isfinite(t_wall), 1, 0))
         return np.minimum(t_min, t_wall), kind
 
+    def visible_obstacles(self, pose: np.ndarray) -> np.ndarray:
+        """Indices of the obstacles the camera renders from ``pose``: the one definition of "in view".
+
+        An obstacle is in view when it is the nearest surface of at least one image column within
+        ``far``: this accounts for the camera's position and field of view, the obstacle's width
+        (a thin one can fall between columns), occlusion by nearer obstacles and the far limit.
+        """
+        t, kind = self.column_hits(np.asarray(pose, float)[None])
+        seen = kind[0][(kind[0] >= 2) & (t[0] <= self.config.camera.far)]
+        return np.unique(seen - 2)
+
     def _cylinder_hits(self, cam: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
         """Ray parameter ``(B, W, n_obs)`` of the first hit on each obstacle's render polygon."""
         obs = self._obs
