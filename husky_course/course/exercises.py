@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from ..config import SimConfig
 from ..data.dataset import Dataset
 
 
@@ -76,3 +77,35 @@ def check_worlds_for_certificate(n: int, rate: float = 0.01, confidence: float =
     return _ok(
         f"{want} worlds without a collision certify a rate below {rate:.0%} with {confidence:.0%} confidence"
     )
+
+
+def check_dead_reckoning(
+    config: SimConfig, point: tuple[float, float], primitive: int, answer: object
+) -> bool:
+    """Chapter 8, exercise 1: a map point moved into the robot's frame after ``primitive``."""
+    from ..sim.primitives import make_library
+
+    end = make_library(config.primitives).local_paths[int(primitive), -1]
+    want = np.asarray(point, float) - end[:2]
+    got = np.asarray(answer, float).ravel()
+    if got.shape != (2,) or not np.allclose(got, want, atol=1e-6):
+        raise AssertionError(
+            f"expected {np.round(want, 4).tolist()}, got {np.round(got, 4).tolist()}: every primitive "
+            "ends at heading 0, so the point moves by minus the primitive's end position"
+        )
+    return _ok(f"the point is at {np.round(want, 3).tolist()} after primitive {primitive}")
+
+
+def check_bonferroni(collisions: int, worlds: int, candidates: int, bound: float) -> bool:
+    """Chapter 8, exercise 2: the collision bound of the best of ``candidates`` planners, 95% overall."""
+    from ..evaluation.statistics import clopper_pearson
+
+    want = clopper_pearson(collisions, worlds, 1 - 0.05 / candidates, "upper")[1]
+    if not math.isclose(float(bound), want, abs_tol=5e-4):
+        plain = clopper_pearson(collisions, worlds, 0.95, "upper")[1]
+        uncorrected = math.isclose(float(bound), plain, abs_tol=5e-4)
+        hint = " (that is the bound without the correction)" if uncorrected else ""
+        raise AssertionError(
+            f"{bound} is not the corrected bound{hint}: use confidence 1 - 0.05 / {candidates}"
+        )
+    return _ok(f"at most {want:.2%} collisions, for the best of {candidates} at 95% overall")
