@@ -14,11 +14,10 @@
 # hard number: the random policy survives 4.4 primitives per video.
 
 # %%
-import numpy as np
-import matplotlib.pyplot as plt
 import gymnasium as gym
+import matplotlib.pyplot as plt
+import numpy as np
 
-import husky_course
 from husky_course.config import get_profile
 from husky_course.data.store import get_dataset
 from husky_course.sim.backends import make_simulator
@@ -33,7 +32,7 @@ print("profile:", profile.name)
 #
 # Left: what an ordinary camera on the robot would see. Middle: the depth image the network gets,
 # in the perceptually uniform *viridis* colormap like the paper's Figure 2 (dark = close, yellow =
-# nothing within 5 m). Right: the course from above, the robot's collision disc in blue, side walls
+# nothing within the far plane, printed below). Right: the course from above, the robot's collision disc in blue, side walls
 # in grey (they stop the robot from driving around the course), the finish line dashed.
 #
 # In a live notebook the slider below the figure changes the world seed; in the book you see the
@@ -52,6 +51,7 @@ widgets.world_explorer(default_seed=0)
 # %%
 # NBVAL_CHECK_OUTPUT
 from husky_course.sim.world import make_world
+
 w = make_world(0, cfg.world)
 print("obstacles:", w.obstacles.shape, " height (m):", cfg.world.obstacle_height)
 print("first obstacle (x, y, r):", np.round(w.obstacles[0], 3))
@@ -84,6 +84,7 @@ print(f"robot collision cylinder radius {cfg.world.robot_radius} m")
 # %%
 ds = get_dataset(profile)
 from husky_course.course.fov import hit_visibility
+
 rng = np.random.default_rng(0)
 sample = rng.choice(len(ds), size=min(len(ds), 600), replace=False)
 fovs = [60, 90, 110, 130, 150]
@@ -91,22 +92,24 @@ vis = hit_visibility(ds.world_seeds[ds.episode[sample]], ds.poses[sample], fovs,
 fig, ax = plt.subplots(figsize=(5, 3))
 ax.bar([str(f) for f in fovs], [100 * vis[f] for f in fovs],
        color=["tab:blue" if f == cam.fov_deg else "0.6" for f in fovs])  # ours in blue
-ax.set_xlabel("field of view (deg)"); ax.set_ylabel("hit obstacles in view (%)")
+ax.set_xlabel("field of view (deg)")
+ax.set_ylabel("hit obstacles in view (%)")
 plt.show()
 print(f"With 90 deg the robot sees {vis[90]:.0%} of what its next primitive could hit; "
       f"with our {cam.fov_deg:.0f} deg (the lab's own choice) it sees {vis[cam.fov_deg]:.0%}.")
 
 # %% [markdown]
-# The rest are obstacles beside the camera or hidden behind nearer ones. Wider than 130° the
-# perspective image stretches badly at its edges, so 130° is our compromise.
+# The rest are obstacles beside the camera or hidden behind nearer ones. A much wider field of view
+# stretches the perspective image badly at its edges, so the configured one (printed above) is our
+# compromise.
 #
 # ## The 25 motion primitives
 #
 # The paper uses *record and playback*: each primitive is a smooth forward manoeuvre that ends at
-# the heading it started from. Ours are S-curves that advance 1 m along the course (ten primitives
-# cross it) and shift the robot sideways by one of 25 evenly spaced offsets. Each is recorded as
-# 101 poses and played back *kinematically* (`resetBasePositionAndOrientation`), as the lab's code
-# does: the real Husky's skid-steer would slip.
+# the heading it started from. Ours are S-curves that advance a fixed distance along the course and
+# shift the robot sideways by one of 25 evenly spaced offsets (the sizes are printed below). Each is
+# recorded as a dense sequence of poses and played back *kinematically*
+# (`resetBasePositionAndOrientation`), as the lab's code does: the real Husky's skid-steer would slip.
 
 # %%
 sim = make_simulator("fast", cfg)
@@ -125,7 +128,15 @@ print(f"path lengths {lengths.min():.3f} ... {lengths.max():.3f} m; all end at h
 
 # %% [markdown]
 # A primitive collides if the robot's collision cylinder touches an obstacle or a wall at any of
-# its recorded poses; the poses are at most 2.6 cm apart, far less than the smallest obstacle.
+# its recorded poses; the cell below measures how far apart those poses are, against the smallest
+# obstacle.
+
+# %%
+prim = cfg.primitives
+gap = np.linalg.norm(np.diff(lib.local_paths[..., :2], axis=1), axis=-1).max()
+print(f"each primitive advances {prim.advance} m ({cfg.max_primitives} of them cross the course) and is recorded "
+      f"as {prim.samples} poses, at most {100 * gap:.1f} cm apart; the smallest obstacle radius is "
+      f"{cfg.world.radius_range[0]} m; the camera sees {cam.fov_deg:.0f} deg wide, up to {cam.far} m.")
 #
 # ## An episode in the Gymnasium environment
 #
@@ -149,7 +160,7 @@ for path in base.path:
     plotting.draw_path(path, ax)
 plt.show()
 fig, axes = plt.subplots(1, len(frames), figsize=(1.6 * len(frames), 1.9))
-for t, (axi, f) in enumerate(zip(np.atleast_1d(axes), frames)):
+for t, (axi, f) in enumerate(zip(np.atleast_1d(axes), frames, strict=True)):
     plotting.show_depth(f, axi, f"t={t}")
 plt.show()
 print(f"{info['step']} primitives applied, collision: {info['collision']}")
@@ -161,7 +172,7 @@ env.close()
 # 1. Change `default_seed` in the explorer. Find a world where the start is boxed in: which
 #    primitives could still be safe?
 # 2. The depth along the view axis differs from the distance along the ray. For a pixel in the
-#    image's corner (130° field of view), by what factor? *(Hint: the ray direction is
-#    `(1, u, v)`; check with `husky_course.camera.pixel_tangents`.)*
+#    image's corner (the configured field of view), by what factor? *(Hint: the ray direction is
+#    `(1, u, v)`; check with `husky_course.sim.camera.pixel_tangents`.)*
 # 3. Re-run the field-of-view measurement with `fovs = [90, 130]` and a robot radius of 0.3 m
 #    (`dataclasses.replace`). Does the gap between the two grow or shrink? Why?

@@ -12,17 +12,20 @@
 # %%
 import json
 import tempfile
+import time
 
-import numpy as np
 import matplotlib.pyplot as plt
+import numpy as np
+from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.data.store import get_dataset, dataset_dir
 from husky_course.data.collect import collect
 from husky_course.data.dataset import load_dataset, stats
 from husky_course.data.splits import encoder_decoder_pairs, reward_set
+from husky_course.data.store import dataset_dir, get_dataset
 from husky_course.sim.backends import make_simulator
 from husky_course.ui import plotting
+from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 ds = get_dataset(profile)  # built once (with a progress bar) and reused
@@ -54,18 +57,40 @@ s = stats(ds)
 fig, ax = plt.subplots(figsize=(6, 3))
 ax.hist(ds.lengths, bins=np.arange(0.5, 11.5), rwidth=0.85, color="tab:blue")
 ax.axvline(s["mean_primitives_per_video"], color="k", label=f"ours: {s['mean_primitives_per_video']:.2f}")
-ax.axvline(4.4, color="tab:red", ls="--", label="paper: 4.4")
-ax.set_xlabel("primitives per video"); ax.set_ylabel("videos"); ax.legend()
+ax.axvline(profile.calibration.target, color="tab:red", ls="--", label=f"paper: {profile.calibration.target}")
+ax.set_xlabel("primitives per video")
+ax.set_ylabel("videos")
+ax.legend()
 plt.show()
 print(f"{s['videos']} videos, {s['images']} images; mean {s['mean_primitives_per_video']:.2f} primitives per video; "
       f"{s['videos_surviving']} videos ({s['videos_surviving'] / s['videos']:.1%}) crossed the course.")
 
 # %% [markdown]
-# The calibration that gives this mean (full profile: 10,000 videos) is in `husky_course/config.py`:
-# obstacle radii uniform in [0.15, 0.35] m, obstacles only beyond the first 2 m (a start zone),
-# start `y` uniform in [−2, 2] m, primitives advancing 1 m with lateral offsets up to ±0.8 m, and a
-# robot collision cylinder of radius 0.45 m.
+# ## The calibration behind that mean
 #
+# The paper fixes the course and the random policy but not the obstacles' radii; its one hard
+# number is the mean video length. So we swept the radius range: for each candidate, random-policy
+# videos in worlds of a collection seed *other than the dataset's* (the worlds we tuned on are not
+# the worlds we report), their mean length and a 95% interval. Only lengths are needed, so no image
+# is rendered and the sweep takes seconds. The other choices of the course are printed below it.
+
+# %%
+from husky_course.data.calibration import best_range, calibrate
+
+rows = calibrate(profile.sim, profile.calibration, progress=False)
+display(Markdown(markdown_table([r.row() for r in rows])))
+best = best_range(rows, profile.calibration.target)
+chosen = tuple(profile.sim.world.radius_range)
+print(f"nearest to the paper's {profile.calibration.target}: radii {best.radius_range} "
+      f"(mean {best.mean:.2f}, 95% interval [{best.lo:.2f}, {best.hi:.2f}], "
+      f"{'holds' if best.lo <= profile.calibration.target <= best.hi else 'misses'} the target); "
+      f"the configured range {chosen} is {'this one' if best.radius_range == chosen else 'another one'}.")
+w, prim = profile.sim.world, profile.sim.primitives
+print(f"also fixed in the config: obstacles only beyond x = {w.obstacle_x_min} m (a start zone), start y uniform "
+      f"in ±{w.start_half_width} m, primitives advancing {prim.advance} m with lateral offsets up to "
+      f"±{prim.lateral_spread} m, a robot collision cylinder of radius {w.robot_radius} m.")
+
+# %% [markdown]
 # ## The single-indexed pool and the −1 convention
 #
 # All images of all videos are appended into one array. The paper marks where a video ends in a
@@ -82,7 +107,7 @@ print("pool index :", " ".join(f"{i:4d}" for i in idx))
 print("episode    :", " ".join(f"{e:4d}" for e in ds.episode[idx]))
 print("prims      :", " ".join(f"{p:4d}" for p in ds.prims[idx]))
 print("applied    :", " ".join(f"{p:4d}" for p in ds.applied[idx]))
-print("label      :", " ".join(f"{l:4d}" for l in ds.labels[idx]))
+print("label      :", " ".join(f"{lab:4d}" for lab in ds.labels[idx]))
 
 # %% [markdown]
 # **The trap.** The encoder/decoder learns *image t + primitive t → image t+1*. Pairing pool entry
@@ -123,7 +148,7 @@ for name, split in [("train", rs.train), ("validation", rs.val)]:
 # %% [markdown]
 # ## Fast simulator vs PyBullet
 #
-# PyBullet's renderer makes about 80–160 images per second here; the paper's 44,000 images would
+# PyBullet's renderer is slow at this (the rate measured below); the paper's 44,000 images would
 # take minutes. Everything in the course is vertical and the camera never tilts, so the first
 # surface a pixel's ray meets depends only on its column: our `fast` backend ray-casts analytically
 # in numpy, batched over many poses. It reproduces the renderer's conventions: pixels sampled at
@@ -131,26 +156,35 @@ for name, split in [("train", rs.train), ("validation", rs.val)]:
 # 20-sided prism: the outline PyBullet itself builds for a cylinder, handed to its renderer as an
 # explicit mesh. (PyBullet's own cylinder visual adds a 1 mm margin and an outline that changes
 # with height, enough to move a silhouette that grazes a pixel's sample point by one column.)
-# `tests/test_fast_vs_pybullet.py` requires a 99th-percentile error of at most 0.02 on every one of
-# 250 views, and identical collision labels on 1,000+ primitive applications; here are a few.
+# `tests/test_fast_vs_pybullet.py` bounds the largest per-pixel difference on every one of many
+# random views, and requires identical collision labels on over a thousand primitive applications;
+# here are a few views, with both backends timed.
 
 # %%
 fast, ref = make_simulator("fast", profile.sim), make_simulator("pybullet", profile.sim)
 rows = np.flatnonzero(ds.step == 2)[:4]
 fig, axes = plt.subplots(3, len(rows), figsize=(2.6 * len(rows), 7.5))
-errs = []
+errs, t_fast, t_ref = [], 0.0, 0.0
 for c, i in enumerate(rows):
     seed, pose = int(ds.world_seeds[ds.episode[i]]), ds.poses[i].astype(float)
-    fast.load(seed); ref.load(seed)
-    a, b = fast.depth(pose[None])[0], ref.depth(pose[None])[0]
-    errs.append(np.percentile(np.abs(a - b), 99))
+    fast.load(seed)
+    ref.load(seed)
+    t0 = time.perf_counter()
+    a = fast.depth(pose[None])[0]
+    t1 = time.perf_counter()
+    b = ref.depth(pose[None])[0]
+    t_fast, t_ref = t_fast + t1 - t0, t_ref + time.perf_counter() - t1
+    errs.append(np.abs(a - b).max())
     plotting.show_depth(a, axes[0, c], "fast")
     plotting.show_depth(b, axes[1, c], "PyBullet")
-    axes[2, c].imshow(a - b, cmap="RdBu", vmin=-0.2, vmax=0.2); axes[2, c].set_axis_off()
+    axes[2, c].imshow(a - b, cmap="RdBu", vmin=-0.2, vmax=0.2)
+    axes[2, c].set_axis_off()
     axes[2, c].set_title("difference", fontsize=9)
 plt.show()
 ref.close()
-print("99th percentile of |fast - PyBullet| per image:", ", ".join(f"{e:.1e}" for e in errs))
+print("largest |fast - PyBullet| per image:", ", ".join(f"{e:.1e}" for e in errs))
+print(f"one image: PyBullet {1e3 * t_ref / len(rows):.1f} ms ({len(rows) / t_ref:.0f} images/s), "
+      f"fast backend {1e3 * t_fast / len(rows):.2f} ms (one pose at a time; batches are faster still)")
 
 # %% [markdown]
 # ## Exercises

@@ -15,17 +15,17 @@
 # no other cause. We test that one and three more.
 
 # %%
+import matplotlib.pyplot as plt
 import numpy as np
 import torch
-import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.data.store import get_dataset
+from husky_course.course import diagnosis
 from husky_course.data.splits import reward_set
+from husky_course.data.store import get_dataset
 from husky_course.evaluation.metrics import classification
 from husky_course.training import builders, datasets, inference
-from husky_course.course import diagnosis
 from husky_course.ui import plotting
 from husky_course.ui.plotting import markdown_table
 
@@ -167,8 +167,9 @@ for r in results:
     h = r.history
     axes[0].plot(np.array(h.train_loss) / h.train_loss[0], label=r.variant.name)
     axes[1].plot(np.array(h.val_loss) / h.val_loss[0], label=r.variant.name)
-for ax, t in zip(axes, ("training loss", "validation loss")):
-    ax.set_title(t + " (relative to epoch 1)", fontsize=10); ax.set_xlabel("epoch")
+for ax, t in zip(axes, ("training loss", "validation loss"), strict=True):
+    ax.set_title(t + " (relative to epoch 1)", fontsize=10)
+    ax.set_xlabel("epoch")
 axes[1].legend(fontsize=7)
 plt.show()
 
@@ -176,47 +177,57 @@ plt.show()
 # ## Verdict
 
 # %%
-failing = [r for r in results if r.quality.auc < 0.6 or r.quality.accuracy <= r.quality.majority + 0.02]
+def failed(q):
+    return q.auc < 0.6 or q.accuracy <= q.majority + 0.02
+
+
+failing = [r for r in results if failed(r.quality)]
 faithful = results[0].quality
-untrained = probe["untrained encoder's latent (15)"]
+raw_name, latent_name, untrained_name = probe  # the three feature sets, in the order they were probed
+latent_r2, raw_r2, untrained = probe[latent_name], probe[raw_name], probe[untrained_name]
+auc_end_to_end = classification(ds.labels[rs.val], p_img).auc
+auc_with_prim = classification(ds.labels[rs.val], p_prim).auc
+err_seen, err_unseen = (e["depth error (m)"] for e in errs.values())
 lines = [
-    f"- A faithful reproduction learns: AUC {faithful.auc:.3f}, accuracy {faithful.accuracy:.1%} "
-    f"(majority {faithful.majority:.1%}).",
-    f"- Cause 1 (latent lacks depth): the latent explains R² = {probe['frozen latent (15)']:.2f} of the nearest-"
-    f"obstacle distance against {probe['raw image (2,500 pixels)']:.2f} for the raw image "
-    f"and {untrained:.2f} for an untrained encoder's latent"
-    + (" (training to predict images kept *less* distance than random features do)"
-       if probe["frozen latent (15)"] < untrained else "")
-    + f". The paper's suspicion is right that depth is lost, and it costs AUC ({faithful.auc:.3f} vs "
-    f"{classification(ds.labels[rs.val], p_img).auc:.3f} for the same encoder trained end to end), but not enough "
-    "to make the net fail.",
+    f"- A faithful reproduction {'fails' if failed(faithful) else 'learns'}: AUC {faithful.auc:.3f}, "
+    f"accuracy {faithful.accuracy:.1%} (majority {faithful.majority:.1%}).",
+    f"- Cause 1 (latent lacks depth): the latent explains R² = {latent_r2:.2f} of the nearest-"
+    f"obstacle distance against {raw_r2:.2f} for the raw image and {untrained:.2f} for an untrained encoder's latent"
+    + (" (training to predict images kept *less* distance than random features do)" if latent_r2 < untrained else "")
+    + (f". The paper's suspicion is right that depth is lost: the two-step net's AUC is {faithful.auc:.3f} against "
+       f"{auc_end_to_end:.3f} for the same encoder trained end to end"
+       if latent_r2 < raw_r2 and faithful.auc < auc_end_to_end else
+       f". The latent keeps about as much depth as the image ({faithful.auc:.3f} vs {auc_end_to_end:.3f} AUC end to end)")
+    + ("." if failed(faithful) else ", but not enough to make the net fail."),
     f"- Cause 2 (primitive unseen): the exact image-only ceiling is AUC {ceiling['image_only_auc']:.3f}; knowing "
-    f"the primitive lifts the end-to-end CNN from {classification(ds.labels[rs.val], p_img).auc:.3f} to "
-    f"{classification(ds.labels[rs.val], p_prim).auc:.3f}. A real limit, not a failure.",
-    f"- Cause 3 (colliding frames unseen): the decoder's depth error is "
-    f"{list(errs.values())[1]['depth error (m)']:.2f} m on colliding frames vs "
-    f"{list(errs.values())[0]['depth error (m)']:.2f} m on trained-on frames: the never-seen frames are "
-    f"{list(errs.values())[1]['depth error (m)'] / list(errs.values())[0]['depth error (m)'] - 1:+.0%} harder, "
-    "a shift in degree, not a blind spot.",
+    f"the primitive takes the end-to-end CNN from {auc_end_to_end:.3f} to {auc_with_prim:.3f}"
+    + (". A real limit, not a failure." if auc_with_prim > auc_end_to_end and not failed(faithful) else "."),
+    f"- Cause 3 (colliding frames unseen): the decoder's depth error is {err_unseen:.2f} m on colliding frames vs "
+    f"{err_seen:.2f} m on trained-on frames: the never-seen frames are {err_unseen / err_seen - 1:+.0%} harder"
+    + (", a shift in degree, not a blind spot." if err_unseen < 2 * err_seen else ", a blind spot."),
     "- Cause 4 (the pipeline): " + (
         "the slips that reproduce a failure are **" + ", ".join(r.variant.name for r in failing) + "** "
         "(" + "; ".join(f"AUC {r.quality.auc:.3f}, accuracy {r.quality.accuracy:.1%}" for r in failing) + ")."
         if failing else "none of the slips we tried makes the reward net fail."),
 ]
 display(Markdown("\n".join(lines)))
+if not failed(faithful) and failing:
+    display(Markdown(
+        "Read together: the two-step design is weaker than end-to-end training, and an image alone cannot know "
+        "which primitive comes next, but neither makes the reward net fail outright here. Only the slips listed "
+        "under cause 4 leave the net with nothing to learn; a training loss that barely moves and a validation "
+        "loss that drifts up is what that looks like, as in the paper's Graphs 2 and 3."))
+elif failed(faithful):
+    display(Markdown("Read together: the faithful pipeline fails here too, so the causes above are the ones to weigh."))
 
 # %% [markdown]
-# Read together: the two-step design is weaker than end-to-end training, and an image alone cannot
-# know which primitive comes next, but neither makes a reward net fail outright. Only a slip that
-# breaks the link between an image and its label leaves the net with nothing to learn; a training
-# loss that barely moves and a validation loss that drifts up is what that looks like. The fix the
-# paper proposed, training everything together and letting the safety prediction see the primitive,
-# is still the right design: chapter 5 builds it.
+# The fix the paper proposed, training everything together and letting the safety prediction see
+# the primitive, addresses both the lost depth and the unseen primitive: chapter 5 builds it.
 #
 # ## Exercises
 #
 # 1. Write the off-by-one slip yourself from `ds.prims` (hint: where is −1?) and check your labels
-#    with `husky_course.exercises.check_shifted_labels(ds, your_labels)`.
+#    with `husky_course.course.exercises.check_shifted_labels(ds, your_labels)`.
 # 2. Adam divides each step by a running estimate of the gradient's scale. Use that to explain why
 #    the "summed loss" variant trains almost exactly like the faithful one. Would plain SGD agree?
 # 3. The exact image-only ceiling uses *q*, the fraction of primitives that collide. Plot a

@@ -15,20 +15,20 @@
 # primitive, and is trained on the one that was applied. A planner then gets all 25 from one pass.
 
 # %%
+import matplotlib.pyplot as plt
 import numpy as np
 import torch
-import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.data.store import get_dataset
-from husky_course.data.splits import encoder_decoder_pairs, reward_set
-from husky_course.data.labels import primitive_outcomes
-from husky_course.evaluation.metrics import classification, image_errors, reliability, roc_auc
-from husky_course.models.safety import JointModel
-from husky_course.models.base import count_parameters
-from husky_course.training import builders, datasets, inference
 from husky_course.data import splits
+from husky_course.data.labels import primitive_outcomes
+from husky_course.data.splits import encoder_decoder_pairs, reward_set
+from husky_course.data.store import get_dataset
+from husky_course.evaluation.metrics import classification, image_errors, reliability, roc_auc
+from husky_course.models.base import count_parameters
+from husky_course.models.safety import JointModel
+from husky_course.training import builders, datasets, inference
 from husky_course.ui import plotting
 from husky_course.ui.plotting import markdown_table
 

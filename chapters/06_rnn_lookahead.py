@@ -22,20 +22,20 @@
 # steps and up to the collision, so every prefix of every video is a training example.
 
 # %%
+import matplotlib.pyplot as plt
 import numpy as np
 import torch
-import matplotlib.pyplot as plt
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.data import splits
 from husky_course.data.store import get_dataset
+from husky_course.evaluation.horizons import horizon_errors
 from husky_course.models.base import count_parameters
 from husky_course.models.rnn import RNNLookahead
-from husky_course.evaluation.horizons import horizon_errors
-from husky_course.training.inference import loop_predictions, rnn_predictions
-from husky_course.training.datasets import sequence_data
 from husky_course.training import builders
-from husky_course.data import splits
+from husky_course.training.datasets import sequence_data
+from husky_course.training.inference import loop_predictions, rnn_predictions
 from husky_course.ui import plotting
 
 profile = get_profile()
@@ -79,7 +79,8 @@ loop_img, _ = loop_predictions(joint.model, imgs, prims)
 fig, axes = plt.subplots(9, 5, figsize=(7, 12.5))
 for b in range(len(full)):
     plotting.show_depth(imgs[b].float().numpy(), axes[3 * b, 0], "image t" if b == 0 else None)
-    axes[3 * b + 1, 0].set_axis_off(); axes[3 * b + 2, 0].set_axis_off()
+    axes[3 * b + 1, 0].set_axis_off()
+    axes[3 * b + 2, 0].set_axis_off()
     for k in range(4):
         true = bank[data["next_idx"][full[b], k]].float().numpy()
         plotting.show_depth(true, axes[3 * b, k + 1], f"true t+{k + 1}" if b == 0 else None)
@@ -106,10 +107,13 @@ fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
 for name, e in errs.items():
     axes[0].plot(h, e["mae"], "o-", label=name)
     axes[1].plot(h, e["auc"], "o-", label=name)
-axes[0].set_ylabel("image MAE (normalised depth)"); axes[1].set_ylabel("collision ROC AUC")
+axes[0].set_ylabel("image MAE (normalised depth)")
+axes[1].set_ylabel("collision ROC AUC")
 axes[1].axhline(0.5, color="0.6", ls=":", lw=1)
 for ax in axes:
-    ax.set_xlabel("horizon (steps ahead)"); ax.set_xticks(h); ax.legend(fontsize=8)
+    ax.set_xlabel("horizon (steps ahead)")
+    ax.set_xticks(h)
+    ax.legend(fontsize=8)
 plt.show()
 rows = "\n".join(f"| {k} | {int(errs['RNN']['n'][k - 1])} | " +
                   " | ".join(f"{errs[m]['mae'][k - 1]:.3f} / {errs[m]['auc'][k - 1]:.3f}" for m in errs) + " |"
@@ -117,32 +121,33 @@ rows = "\n".join(f"| {k} | {int(errs['RNN']['n'][k - 1])} | " +
 display(Markdown("| horizon | image pairs | RNN: MAE / AUC | loop: MAE / AUC |\n|---|---|---|---|\n" + rows))
 
 # %%
-r, l = errs["RNN"], errs["decode/re-encode loop (Algorithm 1)"]
+r, loop = errs["RNN"], errs["decode/re-encode loop (Algorithm 1)"]
 
 def reach(e, level=0.8):
     """How many steps ahead the collision AUC stays at or above ``level``."""
     below = np.flatnonzero(e["auc"] < level)
     return int(below[0]) if below.size else HORIZON
 
+
 display(Markdown(
-    f"At one step the loop's collision AUC is {l['auc'][0]:.3f} and the RNN's {r['auc'][0]:.3f}; at {HORIZON} "
-    f"steps, {l['auc'][-1]:.3f} and {r['auc'][-1]:.3f}. The RNN stays at or above AUC 0.8 for **{reach(r)}** "
-    f"step(s), the loop for **{reach(l)}**. Image error grows from {r['mae'][0]:.3f} to {r['mae'][-1]:.3f} for "
-    f"the RNN and from {l['mae'][0]:.3f} to {l['mae'][-1]:.3f} for the loop. "
+    f"At one step the loop's collision AUC is {loop['auc'][0]:.3f} and the RNN's {r['auc'][0]:.3f}; at {HORIZON} "
+    f"steps, {loop['auc'][-1]:.3f} and {r['auc'][-1]:.3f}. The RNN stays at or above AUC 0.8 for **{reach(r)}** "
+    f"step(s), the loop for **{reach(loop)}**. Image error grows from {r['mae'][0]:.3f} to {r['mae'][-1]:.3f} for "
+    f"the RNN and from {loop['mae'][0]:.3f} to {loop['mae'][-1]:.3f} for the loop. "
     + ("Re-encoding its own blurry predictions costs the loop its collision skill after the first step, while "
        "the RNN, which never re-reads its output, keeps it further ahead. "
-       if reach(r) > reach(l) else
+       if reach(r) > reach(loop) else
        "With this much training data the RNN does not yet out-predict the loop. ")
-    + "Neither can know what lies beyond the nearest obstacles or outside the field of view, so both fade "
-    "at long horizons."))
+    + ("Neither can know what lies beyond the nearest obstacles or outside the field of view, so both fade "
+       "at long horizons." if r["auc"][-1] < r["auc"][0] and loop["auc"][-1] < loop["auc"][0] else "")))
 
 # %% [markdown]
 # ## Exercises
 #
-# 1. Train the RNN with `HORIZON = 2` instead of 5 (copy `sequence_data` with a different
+# 1. Train the RNN with `HORIZON = 2` instead of the configured horizon (copy `sequence_data` with a different
 #    `horizon`). Does the one-step AUC improve when the model has less to predict?
 # 2. The RNN sees the primitives as learned embeddings. Plot the 25 embeddings after a 2-D PCA. Are
 #    neighbouring primitives neighbours in the embedding?
 # 3. Why does the number of image pairs fall with the horizon? Compute it from the lengths of the
-#    validation videos alone (`ds.lengths[husky_course.dataset.val_videos(ds)]`) and check your
-#    numbers with `husky_course.exercises.check_pairs_per_horizon(lengths, your_counts)`.
+#    validation videos alone (`ds.lengths[husky_course.data.splits.val_videos(ds)]`) and check your
+#    numbers with `husky_course.course.exercises.check_pairs_per_horizon(lengths, your_counts)`.

@@ -32,16 +32,16 @@
 # (`husky_course.evaluation.eval_world_seeds`), so no model has seen them.
 
 # %%
-import numpy as np
 import matplotlib.pyplot as plt
+import numpy as np
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.evaluation.analysis import collision_cause
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
-from husky_course.sim.fast import FastSimulator
+from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.planners.registry import make_planner
+from husky_course.sim.fast import FastSimulator
 from husky_course.training import builders
 from husky_course.ui import plotting, widgets
 from husky_course.ui.plotting import markdown_table
@@ -144,7 +144,10 @@ for label, sw in (("lookahead (Algorithm 1)", sweep), ("rnn", rnn_sweep)):
     ax.errorbar(ks, s, yerr=[s - c[:, 0], c[:, 1] - s], fmt="o-", capsize=3, label=label)
 ax.axhline(results["oracle"].success_rate, color="tab:green", ls="--", lw=1, label="oracle")
 ax.axhline(results["heuristic"].success_rate, color="tab:olive", ls=":", lw=1, label="heuristic")
-ax.set_xlabel("look_ahead"); ax.set_ylabel("success rate"); ax.set_xticks(range(5)); ax.legend(fontsize=8)
+ax.set_xlabel("look_ahead")
+ax.set_ylabel("success rate")
+ax.set_xticks(range(5))
+ax.legend(fontsize=8)
 plt.show()
 display(Markdown(markdown_table(
     [["lookahead success", *(sweep[k].success_rate for k in sweep)],
@@ -163,7 +166,7 @@ fails = [e for e in results[best].episodes if e.collided][:4]
 sim = FastSimulator()
 if fails:
     fig, axes = plt.subplots(1, len(fails), figsize=(4.2 * len(fails), 3.2), squeeze=False)
-    for ax, e in zip(axes[0], fails):
+    for ax, e in zip(axes[0], fails, strict=True):
         world = sim.load(e.world_seed)
         plotting.draw_world(world, ax, e.poses[0])
         plotting.draw_path(e.path, ax, lw=2)
@@ -174,9 +177,10 @@ if fails:
     counts = {c: causes.count(c) for c in ("out of view", "in view", "wall")}
     out_share = counts["out of view"] / max(len(causes), 1)
     display(Markdown(
-        f"Of the {len(causes)} collisions of `{best}`, {counts['out of view']} were with an obstacle whose centre "
-        f"was outside the camera's 130° field of view when the primitive was chosen, {counts['in view']} with one "
-        f"in view and {counts['wall']} with a side wall. " + (
+        f"Of the {len(causes)} collisions of `{best}`, {counts['out of view']} were with an obstacle that no "
+        "column of the image rendered when the primitive was chosen (beside the camera, hidden behind a nearer "
+        f"one or beyond the far plane), {counts['in view']} with one in view and {counts['wall']} with a side "
+        "wall. " + (
             "Most were out of view: no planner that sees only the current image could have avoided them, and "
             "memory of earlier images is the missing ingredient."
             if out_share > 0.5 else
@@ -200,7 +204,7 @@ widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, de
 #    same with `--planner lookahead --look-ahead 0`. Which one would you deploy, and what does the
 #    upper bound on the collision rate add to the success rate? With 0 collisions in *n* worlds that
 #    bound is 1 − 0.05^(1/n): how many held-out worlds certify a collision rate below 1%? Check with
-#    `husky_course.exercises.check_worlds_for_certificate(n)`.
+#    `husky_course.course.exercises.check_worlds_for_certificate(n)`.
 # 2. Give the heuristic memory (`make_planner("heuristic", memory=True)`): it remembers where it saw
 #    obstacles and shifts them as it moves. How much of the gap to the oracle does memory close?
 # 3. Algorithm 1 adds the halved scores of a *single* continuation (the best-so-far) to every
