@@ -1,11 +1,13 @@
-"""Decision time of Algorithm 1: batched over the 25 primitives vs a naive per-primitive loop.
+"""Decision time of Algorithm 1 (batched vs a naive loop) and of the planners with memory.
 
 Run: ``python benchmarks/bench_decision.py [--profile quick] [--look-ahead 3] [--repeats 200]``.
 
 Times one decision of ``lookahead`` (25 primitives, ``look_ahead`` = 3) with the library's batched
 implementation and with the line-by-line reference (one decoder and encoder call per primitive),
-for both readings of the reward line, and prints milliseconds and the speed-up. Uses trained
-checkpoints if the profile has them, otherwise a seeded untrained model (same cost).
+for both readings of the reward line, and prints milliseconds and the speed-up. Then times one
+decision of the distilled planner, the mapping planner and the memory student, side by side, along
+a real episode's images (the memory planners' maps grow as they go). Uses trained checkpoints if
+the profile has them, otherwise seeded untrained models (same cost).
 """
 
 from __future__ import annotations
@@ -57,6 +59,34 @@ def main() -> None:
             f"  reward={reward:10s} batched {fast:7.2f} ms   naive loop {slow:8.2f} ms"
             f"   speed-up {slow / fast:5.1f}x"
         )
+    decisions(get_profile(args.profile))
+
+
+def decisions(profile) -> None:
+    """ms per decision of the distilled, mapping and memory planners along one episode's images."""
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.models.safety import SurvivalNet
+    from husky_course.planners.learned import DistilledPlanner
+    from husky_course.planners.memory import MemoryPlanner
+    from husky_course.planners.registry import make_planner
+    from husky_course.sim.fast import FastSimulator
+    from husky_course.training.memory import new_memory_net
+
+    planners = {}
+    for name in ("distilled", "memory"):
+        try:
+            planners[name] = make_planner(name, profile=profile)
+        except Exception:  # no checkpoint: an untrained network costs the same
+            torch.manual_seed(0)
+            net = SurvivalNet() if name == "distilled" else new_memory_net(profile)
+            planners[name] = DistilledPlanner(net) if name == "distilled" else MemoryPlanner(net, profile.sim)
+    planners["mapping"] = make_planner("mapping", config=profile.sim)
+    sim = FastSimulator(profile.sim)
+    print("one decision, single thread, over 20 held-out episodes:")
+    for name, planner in planners.items():
+        times = [t for s in eval_world_seeds(20, 1) for t in run_episode(planner, sim, int(s)).decision_times]
+        mean, worst = 1e3 * float(np.mean(times)), 1e3 * float(np.max(times))
+        print(f"  {name:10s} {mean:7.2f} ms mean   {worst:7.2f} ms max")
 
 
 if __name__ == "__main__":
