@@ -30,7 +30,7 @@ from husky_course.sim.backends import make_simulator
 
 QUICK = get_profile("quick")  # resolved once, passed down
 
-BASIC = ("random", "heuristic", "oracle")
+BASIC = ("random", "heuristic", "mapping", "oracle")
 JSON_FIELDS = {
     "planner",
     "worlds",
@@ -87,14 +87,15 @@ def test_bad_observations_raise(sim, name):
 
 
 def test_registry_errors(monkeypatch):
-    assert set(PLANNERS) == {"random", "heuristic", "lookahead", "rnn", "distilled", "oracle"}
-    names = "random, heuristic, lookahead, rnn, distilled, oracle"
+    everything = {"random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "memory", "oracle"}
+    assert set(PLANNERS) == everything
+    names = "random, heuristic, mapping, lookahead, rnn, distilled, memory, oracle"
     with pytest.raises(PlannerError, match=f"choose one of {names}"):
         make_planner("astar")
     assert issubclass(PlannerError, ValueError)
     with pytest.raises(PlannerError, match="bad arguments"):
         make_planner("heuristic", look_ahead=2)
-    for name in ("lookahead", "rnn", "distilled"):
+    for name in ("lookahead", "rnn", "distilled", "memory"):
         with pytest.raises(PlannerError, match="is learned: pass profile="):
             make_planner(name, look_ahead=1)
     monkeypatch.setitem(sys.modules, "husky_course.planners.learned", None)  # module unavailable
