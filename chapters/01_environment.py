@@ -9,9 +9,9 @@
 # - run an episode of the Gymnasium environment `HuskyNav-v0`.
 #
 # The paper's robot is a Clearpath Husky in PyBullet, driving through a 10 × 10 m course with 20
-# cylinders whose height is 100 × `robot_height` = 7.5 m. The paper samples positions and radii
-# uniformly but never prints the ranges, so we calibrated them (chapter 2) to reproduce its one
-# hard number: the random policy survives 4.4 primitives per video.
+# cylinders whose height is 100 × `robot_height` (our value is printed below). The paper samples
+# positions and radii uniformly but never prints the ranges, so we calibrated them (chapter 2) to
+# reproduce its one hard number: the random policy survives 4.4 primitives per video.
 
 # %%
 import gymnasium as gym
@@ -99,9 +99,9 @@ print(f"With 90 deg the robot sees {vis[90]:.0%} of what its next primitive coul
       f"with our {cam.fov_deg:.0f} deg (the lab's own choice) it sees {vis[cam.fov_deg]:.0%}.")
 
 # %% [markdown]
-# The rest are obstacles beside the camera or hidden behind nearer ones. A much wider field of view
-# stretches the perspective image badly at its edges, so the configured one (printed above) is our
-# compromise.
+# The rest are beside the camera, hidden behind nearer obstacles or beyond the far plane. A much
+# wider field of view stretches the perspective image badly at its edges, so the configured one
+# (printed above) is our compromise.
 #
 # ## The 25 motion primitives
 #
@@ -134,15 +134,17 @@ print(f"path lengths {lengths.min():.3f} ... {lengths.max():.3f} m; all end at h
 # %%
 prim = cfg.primitives
 gap = np.linalg.norm(np.diff(lib.local_paths[..., :2], axis=1), axis=-1).max()
-print(f"each primitive advances {prim.advance} m ({cfg.max_primitives} of them cross the course) and is recorded "
-      f"as {prim.samples} poses, at most {100 * gap:.1f} cm apart; the smallest obstacle radius is "
-      f"{cfg.world.radius_range[0]} m; the camera sees {cam.fov_deg:.0f} deg wide, up to {cam.far} m.")
-#
+print(f"each primitive advances {prim.advance} m ({cfg.max_primitives} of them cross the course) "
+      f"and is recorded as {prim.samples} poses, at most {100 * gap:.1f} cm apart; the smallest obstacle "
+      f"radius is {cfg.world.radius_range[0]} m; the camera sees {cam.fov_deg:.0f} deg wide, "
+      f"up to {cam.far} m.")
+
+# %% [markdown]
 # ## An episode in the Gymnasium environment
 #
 # `gym.make("HuskyNav-v0")` gives the standard interface: the action is a primitive index, the
 # observation the depth image, `terminated` means collision and `truncated` means the course was
-# crossed (10 primitives).
+# crossed (after `cfg.max_primitives` primitives, printed above; the paper's videos have 10).
 
 # %%
 env = gym.make("HuskyNav-v0", backend="fast")
@@ -150,7 +152,7 @@ obs, info = env.reset(seed=0)
 rng = np.random.default_rng(1)
 frames, done = [obs], False
 while not done:
-    obs, reward, terminated, truncated, info = env.step(int(rng.integers(25)))
+    obs, reward, terminated, truncated, info = env.step(int(rng.integers(env.action_space.n)))
     frames.append(obs)
     done = terminated or truncated
 base = env.unwrapped

@@ -24,6 +24,7 @@ from husky_course.data.dataset import load_dataset, stats
 from husky_course.data.splits import encoder_decoder_pairs, reward_set
 from husky_course.data.store import dataset_dir, get_dataset
 from husky_course.sim.backends import make_simulator
+from husky_course.sim.world import obstacle_outline
 from husky_course.ui import plotting
 from husky_course.ui.plotting import markdown_table
 
@@ -55,15 +56,17 @@ with tempfile.TemporaryDirectory() as tmp:
 # %%
 s = stats(ds)
 fig, ax = plt.subplots(figsize=(6, 3))
-ax.hist(ds.lengths, bins=np.arange(0.5, 11.5), rwidth=0.85, color="tab:blue")
+ax.hist(ds.lengths, bins=np.arange(0.5, profile.sim.max_primitives + 1.5), rwidth=0.85, color="tab:blue")
 ax.axvline(s["mean_primitives_per_video"], color="k", label=f"ours: {s['mean_primitives_per_video']:.2f}")
-ax.axvline(profile.calibration.target, color="tab:red", ls="--", label=f"paper: {profile.calibration.target}")
+ax.axvline(profile.calibration.target, color="tab:red", ls="--",
+           label=f"paper: {profile.calibration.target}")
 ax.set_xlabel("primitives per video")
 ax.set_ylabel("videos")
 ax.legend()
 plt.show()
-print(f"{s['videos']} videos, {s['images']} images; mean {s['mean_primitives_per_video']:.2f} primitives per video; "
-      f"{s['videos_surviving']} videos ({s['videos_surviving'] / s['videos']:.1%}) crossed the course.")
+survived = s["videos_surviving"]
+print(f"{s['videos']} videos, {s['images']} images; mean {s['mean_primitives_per_video']:.2f} primitives "
+      f"per video; {survived} videos ({survived / s['videos']:.1%}) crossed the course.")
 
 # %% [markdown]
 # ## The calibration behind that mean
@@ -86,9 +89,9 @@ print(f"nearest to the paper's {profile.calibration.target}: radii {best.radius_
       f"{'holds' if best.lo <= profile.calibration.target <= best.hi else 'misses'} the target); "
       f"the configured range {chosen} is {'this one' if best.radius_range == chosen else 'another one'}.")
 w, prim = profile.sim.world, profile.sim.primitives
-print(f"also fixed in the config: obstacles only beyond x = {w.obstacle_x_min} m (a start zone), start y uniform "
-      f"in ±{w.start_half_width} m, primitives advancing {prim.advance} m with lateral offsets up to "
-      f"±{prim.lateral_spread} m, a robot collision cylinder of radius {w.robot_radius} m.")
+print(f"also fixed in the config: obstacles only beyond x = {w.obstacle_x_min} m (a start zone), "
+      f"start y uniform in ±{w.start_half_width} m, primitives advancing {prim.advance} m with lateral "
+      f"offsets up to ±{prim.lateral_spread} m, a robot collision cylinder of radius {w.robot_radius} m.")
 
 # %% [markdown]
 # ## The single-indexed pool and the −1 convention
@@ -96,8 +99,8 @@ print(f"also fixed in the config: obstacles only beyond x = {w.obstacle_x_min} m
 # All images of all videos are appended into one array. The paper marks where a video ends in a
 # collision by writing `-1` into the primitive array at that step; the safety label is 1 exactly
 # there. We keep the primitive that was really applied in a separate array `applied`, and the
-# video index of every image in `episode`, so nothing is ambiguous. A video that survives all 10
-# primitives ends after its 10th image with no `-1` at all.
+# video index of every image in `episode`, so nothing is ambiguous. A video that survives all its
+# primitives (the paper's 10) ends after its last image with no `-1` at all.
 
 # %%
 # two consecutive videos, the first ending in a collision
@@ -113,14 +116,15 @@ print("label      :", " ".join(f"{lab:4d}" for lab in ds.labels[idx]))
 # **The trap.** The encoder/decoder learns *image t + primitive t → image t+1*. Pairing pool entry
 # `i` with `i+1` is only right when step `i` was safe *and* `i+1` belongs to the same video. The
 # paper's filter (drop label-1 images) handles collisions, but the last image of a video that
-# survived all 10 primitives would be paired with the first image of the next video. We filter on
+# survived all its primitives would be paired with the first image of the next video. We filter on
 # the episode index too.
 
 # %%
-fig, axes = plt.subplots(3, 10, figsize=(15, 5))
+steps = profile.sim.max_primitives
+fig, axes = plt.subplots(3, steps, figsize=(1.5 * steps, 5))
 for row, v in enumerate(np.flatnonzero(ds.lengths >= 4)[:3]):
     idx = ds.video(v)
-    for t in range(10):
+    for t in range(steps):
         ax = axes[row, t]
         if t < len(idx):
             lab = "COLLIDES" if ds.labels[idx[t]] else f"prim {ds.applied[idx[t]]}"
@@ -134,12 +138,14 @@ plt.show()
 # ## The two training sets of the paper
 
 # %%
-pairs = encoder_decoder_pairs(ds, seed=0)
-rs = reward_set(ds, seed=0)
+data = profile.data
+pairs = encoder_decoder_pairs(ds, seed=data.seed, val_fraction=data.val_fraction)
+rs = reward_set(ds, seed=data.seed, safe_fraction=data.reward_safe_fraction, val_fraction=data.val_fraction)
 n_unsafe = int(ds.labels[np.concatenate([rs.train, rs.val])].sum())
 n_safe = len(rs.train) + len(rs.val) - n_unsafe
-print(f"encoder/decoder pairs: {len(pairs.train_t)} train / {len(pairs.val_t)} validation (80/20)")
-print(f"reward set: all {n_unsafe} unsafe + 50% of safe = {n_safe} safe images; "
+print(f"videos held out for validation: {data.val_fraction:.0%}")
+print(f"encoder/decoder pairs: {len(pairs.train_t)} train / {len(pairs.val_t)} validation")
+print(f"reward set: all {n_unsafe} unsafe + {data.reward_safe_fraction:.0%} of safe = {n_safe} safe images; "
       f"safe:unsafe = {n_safe / n_unsafe:.2f}:1 (paper: 1.7:1); "
       f"{len(rs.train)} train / {len(rs.val)} validation")
 for name, split in [("train", rs.train), ("validation", rs.val)]:
@@ -148,16 +154,17 @@ for name, split in [("train", rs.train), ("validation", rs.val)]:
 # %% [markdown]
 # ## Fast simulator vs PyBullet
 #
-# PyBullet's renderer is slow at this (the rate measured below); the paper's 44,000 images would
-# take minutes. Everything in the course is vertical and the camera never tilts, so the first
-# surface a pixel's ray meets depends only on its column: our `fast` backend ray-casts analytically
-# in numpy, batched over many poses. It reproduces the renderer's conventions: pixels sampled at
-# integer raster positions with rows flipped. Both backends draw each cylinder as the same
-# 20-sided prism: the outline PyBullet itself builds for a cylinder, handed to its renderer as an
-# explicit mesh. (PyBullet's own cylinder visual adds a 1 mm margin and an outline that changes
-# with height, enough to move a silhouette that grazes a pixel's sample point by one column.)
+# PyBullet's renderer is slow at this: the cell below measures its rate, and what it means for the
+# paper's 44,000 images. Everything in the course is vertical and the camera never tilts, so the
+# first surface a pixel's ray meets depends only on its column: our `fast` backend ray-casts
+# analytically in numpy, batched over many poses. It reproduces the renderer's conventions: pixels
+# sampled at integer raster positions with rows flipped. Both backends draw each cylinder as the
+# same prism (its number of sides is printed below): the outline PyBullet itself builds for a
+# cylinder, handed to its renderer as an explicit mesh. (PyBullet's own cylinder visual adds a 1 mm
+# margin and an outline that changes with height, enough to move a silhouette that grazes a pixel's
+# sample point by one column.)
 # `tests/test_fast_vs_pybullet.py` bounds the largest per-pixel difference on every one of many
-# random views, and requires identical collision labels on over a thousand primitive applications;
+# random views, and requires identical collision labels on many random primitive applications;
 # here are a few views, with both backends timed.
 
 # %%
@@ -182,9 +189,12 @@ for c, i in enumerate(rows):
     axes[2, c].set_title("difference", fontsize=9)
 plt.show()
 ref.close()
+print(f"obstacle prism: {len(obstacle_outline())} sides")
 print("largest |fast - PyBullet| per image:", ", ".join(f"{e:.1e}" for e in errs))
 print(f"one image: PyBullet {1e3 * t_ref / len(rows):.1f} ms ({len(rows) / t_ref:.0f} images/s), "
       f"fast backend {1e3 * t_fast / len(rows):.2f} ms (one pose at a time; batches are faster still)")
+print(f"at these rates the paper's 44,000 images take {44_000 * t_ref / len(rows) / 60:.1f} min "
+      f"with PyBullet, {44_000 * t_fast / len(rows):.1f} s with the fast backend")
 
 # %% [markdown]
 # ## Exercises

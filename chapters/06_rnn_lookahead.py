@@ -14,12 +14,14 @@
 # trained on whole videos, which carries its state forward without re-reading its own output. The
 # paper drew the idea and stopped; here it is built.
 #
-# **Our choices** (the paper gives no layers): the paper's encoder gives the 15-number latent; a
-# linear layer and `tanh` make it the GRU's first hidden state (64 numbers); each primitive enters
-# as a learned embedding of 16 numbers; after each step, one head draws the next depth image
-# (64 → 256 → 2,500, sigmoid) and one predicts whether that step collides (64 → 64 → 1, sigmoid).
-# Every image of a training video starts a sequence with the primitives that followed it, up to five
-# steps and up to the collision, so every prefix of every video is a training example.
+# **Our choices** (the paper gives no layers; every size is in the model printed below): the
+# paper's encoder gives the 15-number latent; a linear layer and `tanh` make it the GRU's first
+# hidden state; each primitive enters as a learned embedding; after each step, one head draws the
+# next depth image (a hidden layer, then 2,500 pixels through a sigmoid) and one predicts whether
+# that step collides (a hidden layer, then one probability). Every image of a training video starts
+# a sequence with the primitives that followed it, up to `HORIZON` steps (the configured
+# `rnn_horizon`, printed below) and up to the collision, so every prefix of every video is a
+# training example.
 
 # %%
 import matplotlib.pyplot as plt
@@ -56,9 +58,11 @@ print(f"training sequences: {len(tr)}, supervised steps: {int(train_seq['label_m
 rnn = builders.get_rnn(profile)
 joint = builders.get_joint(profile)
 fig, ax = plt.subplots(figsize=(6, 3.5))
-plotting.plot_curves(rnn.history, ax, "RNN look-ahead: image BCE + collision BCE over 5 steps", "total loss")
+plotting.plot_curves(rnn.history, ax, f"RNN look-ahead: image BCE + collision BCE over {HORIZON} steps",
+                     "total loss")
 plt.show()
-print(f"{len(rnn.history.train_loss)} epochs, {rnn.history.seconds:.0f} s")
+print(f"HORIZON = {HORIZON} steps; trained for {len(rnn.history.train_loss)} epochs "
+      f"in {rnn.history.seconds:.0f} s")
 
 # %% [markdown]
 # ## Predicted sequences
@@ -93,14 +97,16 @@ plt.show()
 # ## Error against the horizon
 #
 # For every validation image we roll both predictors over the primitives that really followed and
-# score, at each horizon *h* = 1…5, the predicted image against the stored one (mean absolute error)
-# and the predicted collision probability of step *h* against what happened (ROC AUC). Fewer
-# sequences reach the longer horizons, because videos end at collisions; the counts are printed.
+# score, at each horizon *h* = 1 … `HORIZON`, the predicted image against the stored one (mean
+# absolute error) and the predicted collision probability of step *h* against what happened (ROC
+# AUC). Fewer sequences reach the longer horizons, because videos end at collisions; the counts are
+# printed.
 
 # %%
 errs = {
     "RNN": horizon_errors(lambda i, p: rnn_predictions(rnn.model, i, p), ds, va, HORIZON),
-    "decode/re-encode loop (Algorithm 1)": horizon_errors(lambda i, p: loop_predictions(joint.model, i, p), ds, va, HORIZON),
+    "decode/re-encode loop (Algorithm 1)": horizon_errors(
+        lambda i, p: loop_predictions(joint.model, i, p), ds, va, HORIZON),
 }
 h = np.arange(1, HORIZON + 1)
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
@@ -115,31 +121,41 @@ for ax in axes:
     ax.set_xticks(h)
     ax.legend(fontsize=8)
 plt.show()
-rows = "\n".join(f"| {k} | {int(errs['RNN']['n'][k - 1])} | " +
-                  " | ".join(f"{errs[m]['mae'][k - 1]:.3f} / {errs[m]['auc'][k - 1]:.3f}" for m in errs) + " |"
-                  for k in h)
+rows = "\n".join(
+    f"| {k} | {int(errs['RNN']['n'][k - 1])} | "
+    + " | ".join(f"{errs[m]['mae'][k - 1]:.3f} / {errs[m]['auc'][k - 1]:.3f}" for m in errs) + " |"
+    for k in h)
 display(Markdown("| horizon | image pairs | RNN: MAE / AUC | loop: MAE / AUC |\n|---|---|---|---|\n" + rows))
 
 # %%
 r, loop = errs["RNN"], errs["decode/re-encode loop (Algorithm 1)"]
+LEVEL = 0.8  # the collision AUC we call useful
 
-def reach(e, level=0.8):
+
+def reach(e, level=LEVEL):
     """How many steps ahead the collision AUC stays at or above ``level``."""
     below = np.flatnonzero(e["auc"] < level)
     return int(below[0]) if below.size else HORIZON
 
 
-display(Markdown(
-    f"At one step the loop's collision AUC is {loop['auc'][0]:.3f} and the RNN's {r['auc'][0]:.3f}; at {HORIZON} "
-    f"steps, {loop['auc'][-1]:.3f} and {r['auc'][-1]:.3f}. The RNN stays at or above AUC 0.8 for **{reach(r)}** "
-    f"step(s), the loop for **{reach(loop)}**. Image error grows from {r['mae'][0]:.3f} to {r['mae'][-1]:.3f} for "
-    f"the RNN and from {loop['mae'][0]:.3f} to {loop['mae'][-1]:.3f} for the loop. "
-    + ("Re-encoding its own blurry predictions costs the loop its collision skill after the first step, while "
-       "the RNN, which never re-reads its output, keeps it further ahead. "
-       if reach(r) > reach(loop) else
-       "With this much training data the RNN does not yet out-predict the loop. ")
-    + ("Neither can know what lies beyond the nearest obstacles or outside the field of view, so both fade "
-       "at long horizons." if r["auc"][-1] < r["auc"][0] and loop["auc"][-1] < loop["auc"][0] else "")))
+text = (
+    f"At one step the loop's collision AUC is {loop['auc'][0]:.3f} and the RNN's {r['auc'][0]:.3f}; "
+    f"at {HORIZON} steps, {loop['auc'][-1]:.3f} and {r['auc'][-1]:.3f}. The RNN stays at or above AUC "
+    f"{LEVEL} for **{reach(r)}** step(s), the loop for **{reach(loop)}**. Image error grows from "
+    f"{r['mae'][0]:.3f} to {r['mae'][-1]:.3f} for the RNN and from {loop['mae'][0]:.3f} to "
+    f"{loop['mae'][-1]:.3f} for the loop. "
+)
+if reach(r) > reach(loop):
+    text += (f"Re-encoding its own blurry predictions costs the loop its collision skill after {reach(loop)} "
+             "step(s), while the RNN, which never re-reads its output, keeps it further ahead. ")
+elif reach(r) == reach(loop):
+    text += "By this measure the RNN and the loop look equally far ahead. "
+else:
+    text += "On these numbers the RNN does not out-predict the loop. "
+if r["auc"][-1] < r["auc"][0] and loop["auc"][-1] < loop["auc"][0]:
+    text += ("Both fade at long horizons: neither can know what lies beyond the nearest obstacles or outside "
+             "the field of view.")
+display(Markdown(text))
 
 # %% [markdown]
 # ## Exercises

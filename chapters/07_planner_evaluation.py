@@ -14,7 +14,7 @@
 # | planner | sees | idea |
 # |---|---|---|
 # | `random` | nothing | the data-collection policy (the paper's 4.4 primitives) |
-# | `heuristic` | depth image | no learning: the primitive whose swept corridor has the most free depth, two steps deep |
+# | `heuristic` | depth image | no learning: the primitive whose swept corridor has the most free depth, looking `depth` primitives ahead (printed below) |
 # | `lookahead` | depth image | **Algorithm 1** on the joint model |
 # | `rnn` | depth image | random shooting over primitive sequences scored by the RNN of chapter 6 |
 # | `distilled` | depth image | the oracle distilled: a network trained on what the simulator says about all 25 primitives |
@@ -50,12 +50,17 @@ profile = get_profile()
 N = profile.eval.worlds
 LOOK_AHEAD = 2
 
+
+
 def planner(name, look_ahead=LOOK_AHEAD, **kw):
     if name in ("lookahead", "rnn", "distilled"):
         return make_planner(name, look_ahead=look_ahead, profile=profile, train=True, **kw)
     return make_planner(name, **kw)
 
-print(f"profile {profile.name}: {N} held-out worlds, seeds {eval_world_seeds(N)[0]}..{eval_world_seeds(N)[-1]}")
+
+seeds = eval_world_seeds(N)
+print(f"profile {profile.name}: {N} held-out worlds, seeds {seeds[0]}..{seeds[-1]}")
+print(f"LOOK_AHEAD = {LOOK_AHEAD}; the heuristic looks {planner('heuristic').depth} primitives ahead")
 
 # %%
 # NBVAL_CHECK_OUTPUT
@@ -67,14 +72,16 @@ print("95% upper bound on a collision rate with 0 collisions in 500 worlds:",
 # %% [markdown]
 # ## Algorithm 1, one decision at a time
 #
-# The stepper below replays Algorithm 1 (`look_ahead` = 2) in the first held-out world. Left: the
+# The stepper below replays Algorithm 1 (`look_ahead` = `LOOK_AHEAD`, printed above) in the first
+# held-out world. Left: the
 # course from above and the path so far. Top: the final score of every primitive (lower is better;
 # red is the one applied). Bottom: the image the robot has, the image the joint model predicts after
 # the chosen primitive, and the image the simulator actually produces. In a live notebook, sliders
 # choose the world, the planner, `look_ahead` and the step; the book shows the first decision.
 
 # %%
-widgets.planner_stepper(lambda name, k: planner(name, k), ("lookahead", "rnn", "distilled", "heuristic", "oracle"),
+widgets.planner_stepper(lambda name, k: planner(name, k),
+                        ("lookahead", "rnn", "distilled", "heuristic", "oracle"),
                         default_seed=0, default_planner="lookahead", default_look_ahead=LOOK_AHEAD)
 
 # %% [markdown]
@@ -102,7 +109,7 @@ succ = np.array([results[n].success_rate for n in names])
 ci = np.array([results[n].success_ci95 for n in names])
 ax.bar(names, succ, yerr=[succ - ci[:, 0], ci[:, 1] - succ], capsize=4,
        color=["0.6", "tab:olive", "tab:blue", "tab:cyan", "tab:purple", "tab:green"])
-ax.set_ylabel("success rate (10 primitives, no collision)")
+ax.set_ylabel(f"success rate ({profile.sim.max_primitives} primitives, no collision)")
 ax.set_ylim(0, 1.05)
 ax.set_title(f"{N} held-out worlds, exact 95% confidence intervals", fontsize=10)
 plt.show()
@@ -112,6 +119,8 @@ learned = ["lookahead", "rnn", "distilled"]
 best = max(learned, key=lambda n: results[n].success_rate)
 ratio = results[best].success_rate / results["oracle"].success_rate
 heur = results["heuristic"].success_rate
+worst_learned = min(results[n].success_rate for n in learned)
+n_beat = sum(results[n].success_rate > heur for n in learned)
 display(Markdown(
     f"Random crosses {results['random'].success_rate:.1%} of the worlds and survives "
     f"{results['random'].mean_prims:.2f} primitives on average, the paper's baseline. The oracle crosses "
@@ -123,9 +132,12 @@ display(Markdown(
     f"{'' if ratio >= 0.95 else f': it falls short by {0.95 - ratio:.0%} of the oracle'}). "
     f"Its collision rate is at most {results[best].collision_rate_upper95:.1%} with 95% confidence: a "
     "statement about unseen worlds from this distribution, like the PAC-Bayes certificates of the work "
-    "this project grew from. Every learned planner "
-    f"{'beats' if min(results[n].success_rate for n in learned) > results['random'].success_rate else 'does not beat'} "
-    f"random; {'all' if min(results[n].success_rate for n in learned) > heur else 'not all'} of them beat the heuristic."))
+    "this project grew from. "
+    + ("Every learned planner beats random; " if worst_learned > results["random"].success_rate else
+       "Not every learned planner beats random; ")
+    + ("all of them beat the heuristic." if worst_learned > heur else
+       "none of them beats the heuristic." if n_beat == 0 else
+       f"{n_beat} of the {len(learned)} beat the heuristic.")))
 
 # %% [markdown]
 # ## The effect of `look_ahead`
@@ -171,31 +183,39 @@ if fails:
         plotting.draw_world(world, ax, e.poses[0])
         plotting.draw_path(e.path, ax, lw=2)
         plotting.draw_robot(e.poses[-1], world.config.robot_radius, ax, "tab:red")
-        ax.set_title(f"world {e.world_seed - eval_world_seeds(1)[0]}: collided at step {e.n_prims}", fontsize=9)
+        ax.set_title(f"world {e.world_seed - seeds[0]}: collided at step {e.n_prims}", fontsize=9)
     plt.show()
     causes = [collision_cause(e, sim) for e in results[best].episodes if e.collided]
     counts = {c: causes.count(c) for c in ("out of view", "in view", "wall")}
-    out_share = counts["out of view"] / max(len(causes), 1)
-    display(Markdown(
-        f"Of the {len(causes)} collisions of `{best}`, {counts['out of view']} were with an obstacle that no "
-        "column of the image rendered when the primitive was chosen (beside the camera, hidden behind a nearer "
-        f"one or beyond the far plane), {counts['in view']} with one in view and {counts['wall']} with a side "
-        "wall. " + (
-            "Most were out of view: no planner that sees only the current image could have avoided them, and "
-            "memory of earlier images is the missing ingredient."
-            if out_share > 0.5 else
-            "Most obstacles it hit were in view: the camera saw them and the prediction failed, so better "
-            "prediction (more data, longer training, multi-step supervision) is the first lever; the "
-            f"{counts['out of view']} out-of-view collisions are the share that only memory of earlier images can remove.")))
+    text = (
+        f"Of the {len(causes)} collisions of `{best}`, {counts['out of view']} were with an obstacle that "
+        "no column of the image rendered when the primitive was chosen (beside the camera, hidden behind a "
+        f"nearer one or beyond the far plane), {counts['in view']} with one in view and {counts['wall']} "
+        "with a side wall. ")
+    if counts["out of view"] > len(causes) / 2:
+        text += ("Most were out of view: no planner that sees only the current image could have avoided "
+                 "them, and memory of earlier images is the missing ingredient.")
+    elif counts["in view"] > len(causes) / 2:
+        text += ("Most obstacles it hit were in view: the camera saw them and the prediction failed, so "
+                 "better prediction (more data, longer training, multi-step supervision) is the first lever; "
+                 f"the {counts['out of view']} out-of-view collisions are the share that only memory of "
+                 "earlier images can remove.")
+    else:
+        text += ("No cause makes up most of them: better prediction would address the in-view share, only "
+                 "memory of earlier images the out-of-view one.")
+    display(Markdown(text))
 
 # %% [markdown]
 # ## Explore a primitive yourself
 #
 # Choose a held-out world and a primitive: the joint model's predicted next image beside the real
-# one. The book shows primitive 12 (straight ahead) in the first world.
+# one. The book shows the straight-ahead primitive (the one with the smallest lateral offset) in the
+# first world.
 
 # %%
-widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, default_primitive=12)
+straight = int(np.argmin(np.abs(sim.library.offsets)))
+print(f"straight ahead: primitive {straight}")
+widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, default_primitive=straight)
 
 # %% [markdown]
 # ## Exercises

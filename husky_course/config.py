@@ -90,7 +90,7 @@ class PrimitiveConfig:
     n: int = 25
     advance: float = 1.0
     lateral_spread: float = 0.8
-    samples: int = 101  #: recorded poses per primitive (spacing <= 2.6 cm along the path)
+    samples: int = 101  #: recorded poses per primitive (chapter 1 measures their spacing)
 
 
 @dataclass(frozen=True)
