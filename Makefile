@@ -36,7 +36,8 @@ lint: install
 	$(VENV)/bin/ruff check husky_course tests benchmarks chapters
 
 lab: install  ## the chapters in JupyterLab, in the profile the book was last built with (else quick)
-	HUSKY_PROFILE=$$(cat _build/.profile 2>/dev/null || echo quick) $(VENV)/bin/jupyter lab notebooks/
+	HUSKY_PROFILE=$$(cat _build/.profile 2>/dev/null || echo quick) $(VENV)/bin/jupyter lab notebooks/ \
+		$$([ "$$(id -u)" = 0 ] && echo --allow-root)
 
 sync: install  ## after editing a chapter source (or its notebook outside Jupyter): update the other side
 	$(VENV)/bin/jupytext --sync chapters/*.py
