@@ -177,13 +177,7 @@ display(Markdown(markdown_table(
 fails = [e for e in results[best].episodes if e.collided][:4]
 sim = FastSimulator()
 if fails:
-    fig, axes = plt.subplots(1, len(fails), figsize=(4.2 * len(fails), 3.2), squeeze=False)
-    for ax, e in zip(axes[0], fails, strict=True):
-        world = sim.load(e.world_seed)
-        plotting.draw_world(world, ax, e.poses[0])
-        plotting.draw_path(e.path, ax, lw=2)
-        plotting.draw_robot(e.poses[-1], world.config.robot_radius, ax, "tab:red")
-        ax.set_title(f"world {e.world_seed - seeds[0]}: collided at step {e.n_prims}", fontsize=9)
+    plotting.draw_collisions(sim, fails, lambda e: f"world {e.world_seed - seeds[0]}: collided at step {e.n_prims}")
     plt.show()
     causes = [collision_cause(e, sim) for e in results[best].episodes if e.collided]
     counts = {c: causes.count(c) for c in ("out of view", "in view", "wall")}

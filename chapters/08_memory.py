@@ -207,13 +207,7 @@ causes = [collision_cause(e, sim) for e in fails]
 counts = {c: causes.count(c) for c in ("in view", "out of view", "wall")}
 display(Markdown(markdown_table([counts]) if fails else "No collisions on these worlds."))
 if fails:
-    fig, axes = plt.subplots(1, min(3, len(fails)), figsize=(12, 3.2), squeeze=False)
-    for ax, e in zip(axes[0], fails[:3], strict=False):
-        world = sim.load(e.world_seed)
-        plotting.draw_world(world, ax, e.poses[0])
-        plotting.draw_path(e.path, ax, lw=2)
-        plotting.draw_robot(e.poses[-1], world.config.robot_radius, ax, "tab:red")
-        ax.set_title(f"collided at step {e.n_prims}", fontsize=9)
+    plotting.draw_collisions(sim, fails, lambda e: f"collided at step {e.n_prims}", most=3)
     plt.show()
     display(Markdown(
         f"{counts['in view']} of its {len(fails)} collisions hit an obstacle the current image showed (a "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -182,3 +182,19 @@ def markdown_table(
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(fmt(x) for x in r) + " |" for r in cells]
     return "\n".join(lines)
+
+
+def draw_collisions(sim, episodes: Sequence, title: Callable[[object], str], most: int = 4) -> plt.Figure:
+    """Up to ``most`` colliding episodes side by side: map, path, and the robot red where it touched.
+
+    ``title(episode)`` gives each panel's title; ``sim`` reloads each episode's world.
+    """
+    shown = list(episodes)[:most]
+    fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.2), squeeze=False)
+    for ax, e in zip(axes[0], shown, strict=True):
+        world = sim.load(e.world_seed)
+        draw_world(world, ax, e.poses[0])
+        draw_path(e.path, ax, lw=2)
+        draw_robot(e.poses[-1], world.config.robot_radius, ax, "tab:red")
+        ax.set_title(title(e), fontsize=9)
+    return fig
