@@ -87,6 +87,21 @@ display(Markdown(
 # reads it. It works in the built book without a kernel.
 
 # %%
+# NBVAL_CHECK_OUTPUT
+from husky_course.planners.perception import DepthScan, EgoMap
+
+first = sim.load(int(eval_world_seeds(1, REPORT)[0]))
+ego = EgoMap(DepthScan(profile.sim), forget_behind=profile.memory.map_behind)
+ego.add(sim.depth(first.start[None])[0])
+print("points the first image adds to the map:", len(ego.points))
+end = sim.library.local_paths[20, -1]
+before = ego.points[:, :2].copy()
+ego.move(float(end[0]), float(end[1]))
+kept = before[before[:, 0] - end[0] > -profile.memory.map_behind]
+print("after primitive 20 every point moved by", np.round(-end[:2], 3).tolist(), "exactly:",
+      bool(np.allclose(ego.points[:, :2], kept - end[:2])))
+
+# %%
 student = get_memory(profile)  # trained by `python -m husky_course train memory` (part of `train all`)
 memory_planner = make_planner("memory", profile=profile)
 episode, frames = animation.record_map_episode(memory_planner, sim, int(eval_world_seeds(N, REPORT)[3]))
