@@ -13,8 +13,13 @@ $(VENV)/.installed: requirements.txt pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab"  # fail loudly if incomplete
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab, playwright"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
+	@# JupyterLab for students: start the notebook's kernel without asking, no news pop-up
+	mkdir -p $(VENV)/share/jupyter/lab/settings
+	echo '{"@jupyterlab/notebook-extension:tracker": {"autoStartDefaultKernel": true},' \
+		'"@jupyterlab/apputils-extension:notification": {"fetchNews": "false"}}' \
+		> $(VENV)/share/jupyter/lab/settings/overrides.json
 	touch $@
 
 install: $(VENV)/.installed

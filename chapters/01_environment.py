@@ -35,8 +35,8 @@ print("profile:", profile.name)
 # nothing within the far plane, printed below). Right: the course from above, the robot's collision disc in blue, side walls
 # in grey (they stop the robot from driving around the course), the finish line dashed.
 #
-# In a live notebook the slider below the figure changes the world seed; in the book you see the
-# figure at its default value.
+# In a live notebook a slider above the figure changes the world seed and the figure redraws in
+# place; in the book (no kernel) a player steps through the first eight worlds instead.
 
 # %%
 widgets.world_explorer(default_seed=0)

@@ -77,7 +77,8 @@ print("95% upper bound on a collision rate with 0 collisions in 500 worlds:",
 # course from above and the path so far. Top: the final score of every primitive (lower is better;
 # red is the one applied). Bottom: the image the robot has, the image the joint model predicts after
 # the chosen primitive, and the image the simulator actually produces. In a live notebook, sliders
-# choose the world, the planner, `look_ahead` and the step; the book shows the first decision.
+# choose the world, the planner, `look_ahead` and the step; in the book a player steps through the
+# first held-out world's episode of each planner in turn (its title names the planner).
 
 # %%
 widgets.planner_stepper(lambda name, k: planner(name, k),
@@ -203,8 +204,8 @@ if fails:
 # ## Explore a primitive yourself
 #
 # Choose a held-out world and a primitive: the joint model's predicted next image beside the real
-# one. The book shows the straight-ahead primitive (the one with the smallest lateral offset) in the
-# first world.
+# one. A live notebook starts at the straight-ahead primitive (the one with the smallest lateral
+# offset) in the first world; the book's player steps through all of them, right to left.
 
 # %%
 straight = int(np.argmin(np.abs(sim.library.offsets)))

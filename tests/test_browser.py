@@ -7,11 +7,13 @@ build; only notebook *executions* are reused, from jupyter-book's cache, and tha
 whenever the library, the requirements or the build config change (``library.sha256``). With the
 quick artifacts present the build takes seconds plus the execution of the chapters that changed.
 
-Then every page of ``_toc.yml`` is opened in headless Chromium (driven over the DevTools protocol
-on a pipe, standard library only: see ``tests/browser_check.py``) and checked: it loads, every
-``<img>`` is decoded by the browser from a whole, non-empty file, every internal link (and anchor)
-resolves, and no local file it asks for fails. A screenshot of the planner chapter (or the last
-chapter while there is none) is saved under ``_build/screenshots/``.
+Then every page of ``_toc.yml`` is opened in headless Chromium (driven by Playwright through the
+system browser's executable path, offline: see ``tests/book_browser.py``) and checked: it loads,
+every ``<img>`` is decoded by the browser from a whole, non-empty file, every internal link (and
+anchor) resolves, and no local file it asks for fails. The JavaScript players (the book's form of
+the live widgets) are scrubbed: a slider moved, the frame shown must change. Screenshots (the
+planner chapter; a player before and after its slider moved) go to ``_build/screenshots/``, and
+each chapter's HTML size is printed and bounded.
 
 Without Chromium the tests skip, saying so, except under ``CI=true``, where they fail
 (``.ci/run`` installs it).
@@ -33,12 +35,15 @@ from pathlib import Path
 
 import pytest
 import yaml
-from browser_check import (
+from book_browser import (
     CHROMIUM_NAMES,
-    Browser,
     check_page,
+    chromium,
     find_chromium,
     landing_url,
+    move_player,
+    new_page,
+    player_states,
     png_size,
     screenshot,
 )
@@ -51,6 +56,7 @@ STAMP = OUT / "library.sha256"
 SCREENSHOTS = REPO / "_build" / "screenshots"
 SOURCE_SUFFIXES = (".ipynb", ".md", ".myst", ".rst")
 BUILD_TIMEOUT_S = 1500  # a cold build trains the quick models; a warm one takes seconds
+PAGE_MB_LIMIT = 8.0  # a chapter page (players embed their frames) an offline reader downloads
 
 
 def require_chromium() -> str:
@@ -192,7 +198,7 @@ def book() -> dict:
 @pytest.fixture(scope="module")
 def browser():
     chrome = require_chromium()
-    with Browser(chrome) as b:
+    with chromium(chrome) as b:
         yield b
 
 
@@ -259,7 +265,7 @@ def test_every_chapter_renders_in_chromium(book, browser):
             )
         )
         failures += [f"{entry}: {p}" for p in report.problems]
-    print(f"{browser.version}; book built in {book['seconds']:.1f} s\n" + "\n".join(lines))
+    print(f"Chromium {browser.version}; book built in {book['seconds']:.1f} s\n" + "\n".join(lines))
     assert not failures, "\n".join(failures)
 
 
@@ -314,7 +320,60 @@ def test_screenshot_of_the_planner_chapter(book, browser):
     entry = planner_entry(book["entries"][1:] or book["entries"])
     out = SCREENSHOTS / f"{Path(entry).name}.png"
     out.unlink(missing_ok=True)
-    width, height = screenshot(browser, book["pages"][entry], out)
+    page = new_page(browser)
+    try:
+        page.goto(book["pages"][entry].resolve().as_uri(), wait_until="load")
+        width, height = screenshot(page, out)
+    finally:
+        page.close()
     assert (width, height) == (1280, 2000)
     assert png_size(out) == (1280, 2000) and out.stat().st_size > 10_000, "a blank or broken screenshot"
     print(f"screenshot of {entry}: {out}")
+
+
+def test_page_sizes(book):
+    """Each chapter's HTML (players included) stays light enough to open offline on a laptop."""
+    sizes = {entry: book["pages"][entry].stat().st_size / 1e6 for entry in book["entries"]}
+    print("\n".join(f"{entry}: {mb:.2f} MB" for entry, mb in sizes.items()))
+    heavy = {e: round(mb, 2) for e, mb in sizes.items() if mb > PAGE_MB_LIMIT}
+    assert not heavy, f"pages over {PAGE_MB_LIMIT} MB: {heavy}"
+
+
+def test_players_scrub_offline(book, browser):
+    """Every JavaScript player in the book: moving its slider changes the frame it shows.
+
+    The pages are opened as an offline reader has them (network refused, no kernel). The first
+    player of the book is photographed before and after (``_build/screenshots/player-*.png``).
+    """
+    found, failures, photographed = 0, [], False
+    for entry in book["entries"]:
+        page = new_page(browser)
+        try:
+            page.goto(book["pages"][entry].resolve().as_uri(), wait_until="load")
+            for player in player_states(page):
+                found += 1
+                if player["frames"] < 2:
+                    failures.append(f"{entry}: player {player['id']} has {player['frames']} frame(s)")
+                    continue
+                if not player["src"].startswith("data:image/png") or player["width"] <= 0:
+                    failures.append(f"{entry}: player {player['id']} shows no decoded image")
+                    continue
+                target = min(player["frames"] - 1, 2)
+                if not photographed:
+                    page.locator(f"#{player['id']}").scroll_into_view_if_needed()
+                    screenshot(page, SCREENSHOTS / "player-before.png")
+                move_player(page, player["id"], target)
+                after = next(p for p in player_states(page) if p["id"] == player["id"])
+                if after["value"] != target or after["src"] == player["src"]:
+                    failures.append(
+                        f"{entry}: player {player['id']}: slider at {after['value']} (wanted {target}), "
+                        f"frame {'unchanged' if after['src'] == player['src'] else 'changed'}"
+                    )
+                elif not photographed:
+                    screenshot(page, SCREENSHOTS / "player-after.png")
+                    photographed = True
+        finally:
+            page.close()
+    print(f"{found} players checked; screenshots in {SCREENSHOTS}")
+    assert found >= 4, f"only {found} JavaScript players in the book (expected the explorers and the map)"
+    assert not failures, "\n".join(failures)

@@ -79,3 +79,26 @@ def test_widget_live_redraws_with_the_controls_values(monkeypatch):
     seed.value = 7
     name.value = "a"
     assert calls == [{"seed": 3, "name": "b"}, {"seed": 7, "name": "b"}, {"seed": 7, "name": "a"}]
+
+
+def test_widget_offline_with_frames_is_a_player_over_them(monkeypatch):
+    """Offline with ``frames``: one figure per frame, shown as a self-contained ``to_jshtml`` player."""
+    import IPython.display
+
+    from husky_course.ui import widgets
+
+    monkeypatch.setenv("HUSKY_STATIC_WIDGETS", "1")
+    shown = []
+    monkeypatch.setattr(IPython.display, "display", lambda *objs: shown.extend(objs))
+    calls = []
+    widgets.interactive_figure(
+        _recording_figure(calls),
+        [[widgets.Control("seed", "world", 3, (0, 9)), widgets.Control("name", "planner", "b", ("a", "b"))]],
+        frames=[{"seed": 1}, {"seed": 2}, {"name": "a"}],
+    )
+    assert calls == [{"seed": 1, "name": "b"}, {"seed": 2, "name": "b"}, {"seed": 3, "name": "a"}]
+    (html,) = shown
+    page = html.data
+    assert 'class="animation"' in page and 'type="range"' in page
+    assert page.count("data:image/png;base64,") == 3  # one embedded frame each, no CDN
+    assert "http://" not in page and "https://" not in page  # offline: not even the icons' CDN

@@ -1,4 +1,7 @@
-"""Self-contained players (no kernel, no CDN): an episode step by step, as matplotlib's JavaScript.
+"""Self-contained players (no kernel, no CDN): figures to scrub, as matplotlib's JavaScript.
+
+:func:`figure_player` turns any figure function and a list of its arguments into one player (the
+book's form of a live widget: precomputed frames instead of a kernel).
 
 :func:`map_player` shows what a planner with a map remembers: left, the course from above with the
 robot's path and the map's points (drawn where they are in the world, for the reader); right, the
@@ -8,6 +11,8 @@ the built book can be scrubbed offline.
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import matplotlib.pyplot as plt
@@ -18,6 +23,76 @@ from ..evaluation.episodes import Episode, run_episode
 from ..planners.base import EpisodeStart, Planner
 from ..sim.base import Simulator
 from .plotting import draw_path, draw_robot, draw_world
+
+# matplotlib's player draws its buttons with Font Awesome from a CDN, which an offline reader lacks;
+# the stylesheet is dropped and each icon replaced by a Unicode glyph.
+_CDN_STYLESHEET = re.compile(r'<link rel="stylesheet"\s+href="https://[^"]*font-awesome[^"]*">')
+_GLYPHS = {
+    "fa fa-minus": "&minus;",
+    "fa fa-plus": "+",
+    "fa fa-fast-backward": "|&#x25C0;&#x25C0;",  # only glyphs every system font has
+    "fa fa-step-backward": "&#x25C0;|",
+    "fa fa-play fa-flip-horizontal": "&#x25C0;",
+    "fa fa-pause": "||",
+    "fa fa-play": "&#x25B6;",
+    "fa fa-step-forward": "|&#x25B6;",
+    "fa fa-fast-forward": "&#x25B6;&#x25B6;|",
+}
+
+
+def offline_jshtml(anim: animation.Animation) -> str:
+    """``anim.to_jshtml()`` with no request to the network (buttons drawn with Unicode glyphs)."""
+    html = _CDN_STYLESHEET.sub("", anim.to_jshtml(default_mode="once"))
+    for css, glyph in _GLYPHS.items():
+        html = html.replace(f'<i class="{css}"></i>', glyph)
+    if "https://" in html or "http://" in html or '<i class="fa' in html:
+        raise RuntimeError("matplotlib's to_jshtml changed: the player would ask the network for its icons")
+    return html
+
+
+PLAYER_DPI = 56  #: frames are rasterised at this resolution: sharp enough, ~30 kB per frame
+
+
+def _raster(fig: plt.Figure, dpi: int) -> np.ndarray:
+    """The figure as an RGB array at ``dpi`` (Agg), then closed."""
+    fig.set_dpi(dpi)
+    fig.canvas.draw()
+    rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    plt.close(fig)
+    return rgb
+
+
+def figure_player(
+    figure: Callable[..., plt.Figure], frames: list[dict], dpi: int = PLAYER_DPI, interval_ms: int = 900
+) -> str:
+    """HTML of a player whose frame ``i`` is ``figure(**frames[i])`` (``to_jshtml``: no kernel, no CDN).
+
+    Each figure is drawn once, rasterised at ``dpi`` and shown pixel for pixel (frames of different
+    sizes are padded white to the largest), so the page weighs about ``len(frames)`` small PNGs.
+    """
+    if not frames:
+        raise ValueError("figure_player needs at least one frame")
+    images = [_raster(figure(**kwargs), dpi) for kwargs in frames]
+    height = max(im.shape[0] for im in images)
+    width = max(im.shape[1] for im in images)
+    padded = []
+    for im in images:
+        canvas = np.full((height, width, 3), 255, np.uint8)
+        canvas[: im.shape[0], : im.shape[1]] = im
+        padded.append(canvas)
+    fig = plt.figure(figsize=(width / dpi, height / dpi), dpi=dpi)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_axis_off()
+    shown = ax.imshow(padded[0], interpolation="nearest")
+
+    def draw(i: int) -> tuple:
+        shown.set_data(padded[i])
+        return (shown,)
+
+    anim = animation.FuncAnimation(fig, draw, frames=len(padded), interval=interval_ms, blit=False)
+    html = offline_jshtml(anim)
+    plt.close(fig)
+    return html
 
 
 @dataclass
@@ -94,6 +169,6 @@ def map_player(sim: Simulator, episode: Episode, frames: list[MapFrame], interva
             ax.set_yticks([])
 
     anim = animation.FuncAnimation(fig, draw, frames=len(frames), interval=interval_ms)
-    html = anim.to_jshtml(default_mode="once")
+    html = offline_jshtml(anim)
     plt.close(fig)
     return html

@@ -22,6 +22,7 @@ from ..sim.backends import make_simulator
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.world import World
+from .animation import figure_player
 from .plotting import draw_path, draw_robot, draw_world, figure_two, show_depth
 
 
@@ -48,24 +49,41 @@ class Control:
     options: tuple
 
 
-def interactive_figure(figure: Callable[..., plt.Figure], rows: list[list[Control]]) -> None:
-    """Show ``figure(**defaults)`` now; in a live kernel, add the controls and redraw on change.
+def interactive_figure(
+    figure: Callable[..., plt.Figure],
+    rows: list[list[Control]],
+    frames: list[dict] | None = None,
+) -> None:
+    """One figure with its controls: live in a kernel, a JavaScript player (or a still) offline.
 
-    Offline (the built book, CI) only the static figure appears, so no page shows an empty box.
+    In a live kernel with ipywidgets the controls and a single ``Output`` are shown; the figure is
+    drawn into the output and redrawn *in place* whenever a control moves (never a second figure).
+    Offline (the built book, CI, ``HUSKY_STATIC_WIDGETS=1``) there is no kernel to answer a
+    control: with ``frames`` (keyword overrides of the defaults, one per frame) the figures are
+    precomputed into a self-contained player (:func:`~husky_course.ui.animation.figure_player`,
+    no CDN), else the figure at the defaults is drawn once, so no page shows an empty box.
     """
     controls = [c for row in rows for c in row]
-    fig = figure(**{c.name: c.value for c in controls})
-    plt.show()
-    plt.close(fig)
+    defaults = {c.name: c.value for c in controls}
+    from IPython.display import HTML, display
+
     if not widgets_live():
+        if frames:
+            display(HTML(figure_player(figure, [{**defaults, **f} for f in frames])))
+        else:
+            fig = figure(**defaults)
+            plt.show()
+            plt.close(fig)
         return
     import ipywidgets as w
-    from IPython.display import display
 
     def make(c: Control) -> object:
         if isinstance(c.value, str):
             return w.Dropdown(options=list(c.options), value=c.value, description=c.description)
-        return w.IntSlider(value=c.value, min=c.options[0], max=c.options[1], description=c.description)
+        return w.IntSlider(
+            value=c.value, min=c.options[0], max=c.options[1], description=c.description,
+            continuous_update=False,  # redraw when the slider is released, not at every pixel
+        )
 
     made = {c.name: make(c) for c in controls}
     out = w.Output()
@@ -80,6 +98,7 @@ def interactive_figure(figure: Callable[..., plt.Figure], rows: list[list[Contro
     for widget in made.values():
         widget.observe(redraw, names="value")
     display(w.VBox([w.HBox([made[c.name] for c in row]) for row in rows] + [out]))
+    redraw()
 
 
 def show_world(seed: int = 0, backend: str = "fast", config: SimConfig | None = None) -> plt.Figure:
@@ -91,10 +110,12 @@ def show_world(seed: int = 0, backend: str = "fast", config: SimConfig | None = 
     return figure_two(world, depth, rgb)
 
 
-def world_explorer(default_seed: int = 0, backend: str = "fast") -> None:
-    """A world-seed slider around :func:`show_world` (static figure at ``default_seed`` offline)."""
+def world_explorer(default_seed: int = 0, backend: str = "fast", player_worlds: int = 8) -> None:
+    """A world-seed slider around :func:`show_world`; offline, a player over ``player_worlds`` seeds."""
     interactive_figure(
-        lambda seed: show_world(seed, backend), [[Control("seed", "world seed", default_seed, (0, 999))]]
+        lambda seed: show_world(seed, backend),
+        [[Control("seed", "world seed", default_seed, (0, 999))]],
+        frames=[{"seed": default_seed + i} for i in range(player_worlds)],
     )
 
 
@@ -132,7 +153,9 @@ def draw_planner_step(
             "tab:red" if (episode.collided and step == len(episode.actions) - 1) else "tab:purple",
         )
     outcome = "collision" if episode.collided else ("crossed" if episode.success else "stopped")
-    ax_map.set_title(f"world {world.seed}: step {step + 1} of {len(episode.actions)} ({outcome})", fontsize=9)
+    who = getattr(planner, "name", "")
+    where = f"world {world.seed}: step {step + 1} of {len(episode.actions)} ({outcome})"
+    ax_map.set_title(f"{who}, {where}" if who else where, fontsize=9)
     ax_bar = fig.add_subplot(grid[0, 1:])
     scores = episode.scores[step] if step < len(episode.scores) else None
     if scores is not None:
@@ -174,21 +197,25 @@ def planner_stepper(
     seeds: tuple[int, int] = (0, 99),
     sim: Simulator | None = None,
 ) -> None:
-    """Step through a planner's decisions in a held-out world (static figure at the defaults offline).
+    """Step through a planner's decisions in a held-out world.
 
     ``make(name, look_ahead)`` builds a planner; world seeds are held-out evaluation seeds
-    (:func:`husky_course.evaluation.episodes.eval_world_seeds`), indexed by the slider.
+    (:func:`husky_course.evaluation.episodes.eval_world_seeds`), indexed by the slider. Offline, a
+    player steps through the default world's episode of every planner in ``planners`` in turn.
     """
     sim = sim or FastSimulator()
     cache: dict[tuple, tuple] = {}
 
-    def figure(seed_index: int, name: str, look_ahead: int, step: int) -> plt.Figure:
+    def episode_of(seed_index: int, name: str, look_ahead: int) -> tuple:
         key = (seed_index, name, look_ahead)
         if key not in cache:
             planner = make(name, look_ahead)
             world_seed = int(eval_world_seeds(seed_index + 1)[seed_index])
             cache[key] = (planner, run_episode(planner, sim, world_seed, record=True))
-        planner, episode = cache[key]
+        return cache[key]
+
+    def figure(seed_index: int, name: str, look_ahead: int, step: int) -> plt.Figure:
+        planner, episode = episode_of(seed_index, name, look_ahead)
         return draw_planner_step(
             sim.world if sim.world and sim.world.seed == episode.world_seed else sim.load(episode.world_seed),
             episode,
@@ -197,6 +224,15 @@ def planner_stepper(
             sim,
         )
 
+    frames = (
+        []
+        if widgets_live()
+        else [
+            {"name": name, "step": step}
+            for name in planners
+            for step in range(len(episode_of(default_seed, name, default_look_ahead)[1].actions))
+        ]
+    )
     interactive_figure(
         figure,
         [
@@ -209,6 +245,7 @@ def planner_stepper(
                 Control("step", "step", default_step, (0, sim.config.max_primitives - 1)),
             ],
         ],
+        frames=frames,
     )
 
 
@@ -243,4 +280,5 @@ def primitive_explorer(
                 Control("k", "primitive", default_primitive, (0, sim.library.n - 1)),
             ]
         ],
+        frames=[{"k": k} for k in range(sim.library.n)],
     )
