@@ -23,6 +23,7 @@ STAGES = {
     "config": 0,
     "checks": 0,
     "progress": 0,
+    "device": 0,
     "sim": 1,
     "data": 2,
     "models": 3,

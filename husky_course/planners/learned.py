@@ -48,8 +48,21 @@ from .base import Planner, PlannerError, check_look_ahead, check_observation, su
 REWARDS = ("applied", "next_image")
 
 
-def _image(obs: np.ndarray, size: int) -> torch.Tensor:
-    return torch.from_numpy(check_observation(obs, size))[None]
+def _image(obs: np.ndarray, size: int, device: torch.device | None = None) -> torch.Tensor:
+    return torch.from_numpy(check_observation(obs, size))[None].to(device or "cpu")
+
+
+def _device(model: torch.nn.Module) -> torch.device:
+    """Where ``model`` runs: a decision's tensors are made there (the CPU unless moved)."""
+    return next(model.parameters()).device
+
+
+def to_device(planner: Planner, device: torch.device | str) -> Planner:
+    """Move a learned planner's network to ``device`` (``evaluate --device``); others are unchanged."""
+    model = getattr(planner, "model", None)
+    if isinstance(model, torch.nn.Module):
+        model.to(device)
+    return planner
 
 
 def _n_primitives(model: torch.nn.Module) -> int:
@@ -60,10 +73,10 @@ def _n_primitives(model: torch.nn.Module) -> int:
 def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str = "applied") -> np.ndarray:
     """Algorithm 1's final ``prim_scores`` (lower is better), batched over the 25 primitives."""
     model.eval()
-    n = _n_primitives(model)
-    prims = torch.arange(n)
-    z = model.encoder.unchecked(_image(obs, model.encoder.size)[:, None])  # _image has validated it
-    scores = torch.zeros(n)
+    n, dev = _n_primitives(model), _device(model)
+    prims = torch.arange(n, device=dev)
+    z = model.encoder.unchecked(_image(obs, model.encoder.size, dev)[:, None])  # _image has validated it
+    scores = torch.zeros(n, device=dev)
     weight = 1.0
     for i in range(look_ahead + 1):
         if reward == "applied":
@@ -78,7 +91,7 @@ def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str 
             best = int(torch.argmin(scores))
             z = z_list[best : best + 1]
         weight /= 2.0
-    return scores.numpy()
+    return scores.cpu().numpy()
 
 
 @torch.no_grad()
@@ -155,9 +168,11 @@ class RNNPlanner(Planner):
             return self._act(obs)
 
     def _act(self, obs: np.ndarray) -> int:
-        h = self.model.start(_image(obs, self.model.size))
-        _, col = self.model.rollout(h.expand(len(self.sequences), -1), self.sequences, images=False)
-        risk = 1.0 - torch.prod(1.0 - torch.sigmoid(col), dim=1)
+        dev = _device(self.model)
+        sequences = self.sequences.to(dev)  # no copy on the CPU
+        h = self.model.start(_image(obs, self.model.size, dev))
+        _, col = self.model.rollout(h.expand(len(sequences), -1), sequences, images=False)
+        risk = (1.0 - torch.prod(1.0 - torch.sigmoid(col), dim=1)).cpu()
         first = self.sequences[:, 0]
         scores = torch.full((self.n,), float("inf"))
         scores = scores.scatter_reduce(0, first, risk, reduce="amin")
@@ -182,7 +197,8 @@ class DistilledPlanner(Planner):
     @torch.no_grad()
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         with single_thread():
-            s = self.model.survival(_image(obs, self.model.encoder.size))[0].numpy()
+            image = _image(obs, self.model.encoder.size, _device(self.model))
+            s = self.model.survival(image)[0].cpu().numpy()
         self.last_scores = survival_scores(s, self.smooth)
         return int(np.argmin(self.last_scores))
 

@@ -64,7 +64,9 @@ class MemoryPlanner(Planner):
         if self.model is None:
             raise RuntimeError("this MemoryPlanner has no trained network")
         with single_thread():
-            s = self.model.survival(torch.from_numpy(image)[None], torch.from_numpy(grid)[None])[0].numpy()
+            dev = next(self.model.parameters()).device  # the CPU unless `evaluate --device` moved it
+            x, g = torch.from_numpy(image)[None].to(dev), torch.from_numpy(grid)[None].to(dev)
+            s = self.model.survival(x, g)[0].cpu().numpy()
         self.last_scores = survival_scores(s, self.smooth)
         return int(np.argmin(self.last_scores))
 

@@ -29,6 +29,7 @@ from torch import Tensor, nn
 
 from ..config import TrainConfig
 from ..data.io import atomic_write_bytes
+from ..device import resolve_device
 from ..progress import tqdm
 
 CHECKPOINT_FORMAT = 1
@@ -66,10 +67,15 @@ def _n_rows(data: dict[str, Tensor]) -> int:
     return next(iter(sizes.values()))
 
 
-def _batches(data: dict[str, Tensor], order: np.ndarray, batch_size: int):
+def _batches(data: dict[str, Tensor], order: np.ndarray, batch_size: int, device: torch.device):
     for start in range(0, len(order), batch_size):
         idx = torch.from_numpy(order[start : start + batch_size])
-        yield {k: v[idx] for k, v in data.items()}, len(idx)
+        yield {k: v[idx].to(device) for k, v in data.items()}, len(idx)  # a no-op on the CPU
+
+
+def _cpu_state(model: nn.Module) -> dict[str, Tensor]:
+    """The weights as CPU tensors (checkpoints load on any device)."""
+    return {k: v.detach().to("cpu", copy=True) for k, v in model.state_dict().items()}
 
 
 def _save(path: Path, payload: dict) -> None:
@@ -85,7 +91,7 @@ def _payload(model: nn.Module, fingerprint: dict, history: History, **extra: obj
         "spec": model.spec.to_dict(),  # type: ignore[union-attr]
         "fingerprint": json.loads(json.dumps(fingerprint)),
         "history": history.to_dict(),
-        "state_dict": model.state_dict(),
+        "state_dict": _cpu_state(model),
         **extra,
     }
 
@@ -135,11 +141,11 @@ def load_model(path: str | Path, model: nn.Module, fingerprint: dict | None = No
     return History.from_dict(payload["history"])
 
 
-def _evaluate(model: nn.Module, data: dict[str, Tensor], batch_size: int) -> float:
+def _evaluate(model: nn.Module, data: dict[str, Tensor], batch_size: int, device: torch.device) -> float:
     model.eval()
     total, count = 0.0, 0
     with torch.no_grad():
-        for batch, n in _batches(data, np.arange(_n_rows(data)), max(batch_size, 512)):
+        for batch, n in _batches(data, np.arange(_n_rows(data)), max(batch_size, 512), device):
             total += float(model.loss(batch)) * n  # type: ignore[operator]
             count += n
     return total / max(count, 1)
@@ -156,6 +162,7 @@ def fit(
     progress: bool = True,
     desc: str = "train",
     parameters: list[nn.Parameter] | None = None,
+    device: str | None = None,
 ) -> History:
     """Train ``model`` with Adam and early stopping; return the :class:`History`.
 
@@ -176,6 +183,10 @@ def fit(
         TensorBoard event directory.
     parameters : list, optional
         Only these are optimised (e.g. a reward net on a frozen encoder); default: all.
+    device : str, optional
+        Where to train (:func:`husky_course.device.resolve_device`; default ``$HUSKY_DEVICE`` or
+        ``auto``). The data stay on the CPU and travel a batch at a time; the model ends on the
+        CPU, and checkpoints hold CPU tensors.
     """
     if cfg.epochs < 1 or cfg.batch_size < 1 or cfg.lr <= 0 or cfg.patience < 1:
         raise ValueError(f"invalid training config {cfg}")
@@ -185,18 +196,20 @@ def fit(
     run = Path(run_dir) if run_dir is not None else None
     if run is not None and (run / "model.pt").is_file():
         return load_model(run / "model.pt", model, fingerprint)
+    dev = resolve_device(device)
     n_train = _n_rows(train)
     _n_rows(val)
     if run is not None:
         run.mkdir(parents=True, exist_ok=True)
 
+    model.to(dev)  # parameters move in place: ``parameters`` (if given) still names them
     params = parameters if parameters is not None else [p for p in model.parameters() if p.requires_grad]
     optim = torch.optim.Adam(params, lr=cfg.lr, weight_decay=cfg.weight_decay, fused=True)
     hist, start, best_state, bad_epochs = History(), 0, None, 0
     if run is not None and (run / "last.pt").is_file():
         state = read_checkpoint(run / "last.pt")
         load_into(model, state, str(run / "last.pt"), fingerprint)
-        optim.load_state_dict(state["optimizer"])
+        optim.load_state_dict(state["optimizer"])  # its tensors follow the parameters' device
         hist = History.from_dict(state["history"])
         start, bad_epochs, best_state = state["epoch"] + 1, state["bad_epochs"], state["best_state"]
 
@@ -211,7 +224,7 @@ def fit(
         model.train()
         order = np.random.default_rng([cfg.seed, epoch]).permutation(n_train)
         total = 0.0
-        for batch, n in _batches(train, order, cfg.batch_size):
+        for batch, n in _batches(train, order, cfg.batch_size, dev):
             optim.zero_grad(set_to_none=True)
             loss = model.loss(batch)  # type: ignore[operator]
             if not torch.isfinite(loss):
@@ -220,10 +233,10 @@ def fit(
             optim.step()
             total += float(loss.detach()) * n
         hist.train_loss.append(total / n_train)
-        hist.val_loss.append(_evaluate(model, val, cfg.batch_size))
+        hist.val_loss.append(_evaluate(model, val, cfg.batch_size, dev))
         if hist.val_loss[-1] < hist.best_val - cfg.min_delta:
             hist.best_val, hist.best_epoch, bad_epochs = hist.val_loss[-1], epoch, 0
-            best_state = {k: v.detach().clone() for k, v in model.state_dict().items()}
+            best_state = _cpu_state(model)
         else:
             bad_epochs += 1
         hist.seconds = time.perf_counter() - t0
@@ -251,6 +264,7 @@ def fit(
     bar.close()
     if writer is not None:
         writer.close()
+    model.to("cpu")  # planners decide on the CPU; batched inference moves it where it runs
     if best_state is not None:
         model.load_state_dict(best_state)
     model.eval()
