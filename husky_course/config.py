@@ -276,6 +276,20 @@ def _profiles() -> dict[str, Profile]:
     }
 
 
+#: Rough minutes to build each artifact on a 2-core laptop CPU, measured from ``make test`` (quick)
+#: and ``make book`` (full) logs; only for the one-line notice a notebook prints before a build.
+BUILD_MINUTES: dict[str, dict[str, float]] = {
+    "quick": {
+        "dataset": 0.1, "encoder_decoder": 1, "reward_net": 0.2, "safety_image": 0.5, "safety_prim": 0.5,
+        "joint": 1, "diagnosis": 1, "rnn": 1, "survival labels": 0.5, "distilled": 1, "memory": 2,
+    },
+    "full": {
+        "dataset": 0.5, "encoder_decoder": 7, "reward_net": 0.5, "safety_image": 3, "safety_prim": 3,
+        "joint": 6, "diagnosis": 3, "rnn": 8, "survival labels": 1, "distilled": 9, "memory": 5,
+    },
+}
+
+
 def check_profile_name(name: str) -> str:
     """Return ``name`` if it is a known profile, else raise :class:`ConfigError`."""
     if name not in PROFILES:

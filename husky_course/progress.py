@@ -16,6 +16,25 @@ def static_mode() -> bool:
     return bool(os.environ.get("HUSKY_STATIC_WIDGETS") or os.environ.get("CI"))
 
 
+def announce_build(what: str, profile_name: str, command: str) -> None:
+    """One line before an artifact is built: what, roughly how long, and how to build it ahead.
+
+    ``command`` is the CLI subcommand that builds it (``"train joint"``, ``"collect"``).
+
+    A notebook that finds an artifact missing says so before its progress bar starts, so that a
+    student knows why a cell takes minutes (and a teacher how to avoid it before class).
+    """
+    from .config import BUILD_MINUTES  # the floor: config has no imports from here
+
+    minutes = BUILD_MINUTES.get(profile_name, {}).get(what)
+    how_long = f"about {minutes:g} min on 2 CPU cores" if minutes is not None else "time not measured"
+    print(
+        f"Building {what} ({profile_name} profile): not in the artifact store yet, {how_long}; "
+        f"later runs load it. Ahead of time: `python -m husky_course {command} --profile {profile_name}`.",
+        flush=True,
+    )
+
+
 def tqdm(*args: Any, **kwargs: Any) -> Any:
     """``tqdm.auto.tqdm``, or the text ``tqdm.tqdm`` in :func:`static_mode`."""
     if static_mode():

@@ -72,3 +72,21 @@ def test_cli_collect_without_out_fills_the_store(tmp_path, monkeypatch, capsys):
     assert (store.dataset_dir(small) / "meta.json").is_file()
     assert not store.dataset_dir(QUICK).exists()  # not under the 1,000-video name
     assert json.loads(capsys.readouterr().out)["videos"] == 5
+
+
+def test_a_build_is_announced_in_one_line_first(tmp_path, monkeypatch, capsys):
+    """A missing artifact: one line (what, roughly how long, the command) before its bar starts."""
+    from dataclasses import replace
+
+    from husky_course.config import get_profile
+    from husky_course.data import store
+
+    monkeypatch.setenv("HUSKY_ARTIFACTS", str(tmp_path / "artifacts"))
+    profile = get_profile("quick")
+    profile = replace(profile, data=replace(profile.data, videos=8))
+    store.get_dataset(profile, workers=1, progress=False)
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and out[0].startswith("Building dataset (quick profile)")
+    assert "min on 2 CPU cores" in out[0] and "`python -m husky_course collect --profile quick`" in out[0]
+    store.get_dataset(profile, workers=1, progress=False)  # now it loads: nothing announced
+    assert capsys.readouterr().out == ""

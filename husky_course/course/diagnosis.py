@@ -38,7 +38,7 @@ from ..evaluation.metrics import Classification, classification, image_errors, r
 from ..models.base import DEFAULT_DIMS
 from ..models.paper import Encoder, LatentRewardNet
 from ..models.safety import Probe
-from ..progress import tqdm
+from ..progress import announce_build, tqdm
 from ..sim.fast import FastSimulator
 from ..training.builders import get_encoder_decoder
 from ..training.datasets import images_tensor
@@ -283,6 +283,7 @@ def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
     path = model_dir("diagnosis", fingerprint, profile) / "results.json"
     if path.is_file():
         return Diagnosis.from_dict(json.loads(path.read_text()))
+    announce_build("diagnosis", profile.name, "train diagnosis")
     rs = reward_set(ds, profile.data.seed, profile.data.reward_safe_fraction, profile.data.val_fraction)
     tr, va = rs.train, rs.val
     images = images_tensor(ds)

@@ -36,7 +36,7 @@ from ..models.memory import MemoryNet
 from ..planners.base import episode_start
 from ..planners.memory import MemoryPlanner
 from ..planners.oracle import OraclePlanner
-from ..progress import tqdm
+from ..progress import announce_build, tqdm
 from ..sim.fast import FastSimulator
 from ..training.memory import final_fingerprint, memory_dir, memory_fingerprint, new_memory_net
 from ..training.trainer import History, fit, save_model
@@ -136,6 +136,8 @@ def get_memory(profile: Profile, progress: bool = True) -> Student:
     mem = profile.memory
     fp = memory_fingerprint(profile)
     run = memory_dir(profile)
+    if not (run / "model.pt").is_file():
+        announce_build("memory", profile.name, "train memory")
     run.mkdir(parents=True, exist_ok=True)
     rounds: list[dict] = []
     parts: list[dict[str, np.ndarray]] = []

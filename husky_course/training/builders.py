@@ -36,6 +36,7 @@ from ..data.store import dataset_id, get_dataset, model_dir, runs_dir, stored_da
 from ..models.paper import EncoderDecoder, LatentRewardNet
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SafetyNet, SurvivalNet
+from ..progress import announce_build
 from .datasets import (
     images_tensor,
     joint_data,
@@ -138,6 +139,7 @@ def _build(
     path = run / "model.pt"
     if path.is_file():
         return Trained(model, load_model(path, model, fingerprint), str(path), fingerprint)
+    announce_build(name, profile.name, f"train {name}")
     train, val = data()
     if prepare is not None:
         prepare(model)
@@ -238,6 +240,7 @@ def get_survival_labels(profile: Profile, progress: bool = True) -> np.ndarray:
     path = _labels_path(profile, dataset_id(ds))
     if path.is_file():
         return load_npy(path)
+    announce_build("survival labels", profile.name, "train distilled")
     labels = survival_steps_parallel(
         ds, profile.model.distill_horizon, config=profile.sim, progress=progress
     )
