@@ -1,9 +1,10 @@
-"""Interactive widgets, each with a static fallback.
+"""Interactive widgets: live in a kernel, a JavaScript player (or a still figure) offline.
 
 Every widget goes through :func:`interactive_figure`: in a live Jupyter kernel with ipywidgets it
-adds sliders and dropdowns that redraw the figure; wherever widgets cannot run (the built book
-read offline, CI, ``HUSKY_STATIC_WIDGETS=1``) it draws the same figure once at the default values,
-so the page never shows an empty box.
+shows sliders and dropdowns above one figure that is redrawn in place; wherever widgets cannot run
+(the built book read offline, CI, ``HUSKY_STATIC_WIDGETS=1``) it precomputes the figure for a few
+values of the controls into a player that needs no kernel and no CDN, so the page never shows an
+empty box and a reader can still scrub.
 """
 
 from __future__ import annotations
