@@ -276,16 +276,17 @@ def _profiles() -> dict[str, Profile]:
     }
 
 
-#: Rough minutes to build each artifact on a 2-core laptop CPU, measured from ``make test`` (quick)
-#: and ``make book`` (full) logs; only for the one-line notice a notebook prints before a build.
+#: Minutes to build each artifact on 2 CPU cores, measured from the progress bars of a clean
+#: ``train all`` (quick) and a clean fresh-clone ``make book`` (full), rounded; used only for the
+#: one-line notice a notebook prints before a build (:func:`husky_course.progress.announce_build`).
 BUILD_MINUTES: dict[str, dict[str, float]] = {
     "quick": {
-        "dataset": 0.1, "encoder_decoder": 1, "reward_net": 0.2, "safety_image": 0.5, "safety_prim": 0.5,
-        "joint": 1, "diagnosis": 1, "rnn": 1, "survival labels": 0.5, "distilled": 1, "memory": 2,
+        "dataset": 0.1, "encoder_decoder": 0.7, "reward_net": 0.1, "safety_image": 0.2, "safety_prim": 0.2,
+        "joint": 0.4, "diagnosis": 0.3, "rnn": 0.5, "survival labels": 0.2, "distilled": 0.3, "memory": 2,
     },
     "full": {
-        "dataset": 0.5, "encoder_decoder": 7, "reward_net": 0.5, "safety_image": 3, "safety_prim": 3,
-        "joint": 6, "diagnosis": 3, "rnn": 8, "survival labels": 1, "distilled": 9, "memory": 5,
+        "dataset": 0.2, "encoder_decoder": 6, "reward_net": 0.3, "safety_image": 2.5, "safety_prim": 2.5,
+        "joint": 5, "diagnosis": 2.5, "rnn": 7, "survival labels": 0.5, "distilled": 5.5, "memory": 4,
     },
 }
 

@@ -27,7 +27,10 @@ def announce_build(what: str, profile_name: str, command: str) -> None:
     from .config import BUILD_MINUTES  # the floor: config has no imports from here
 
     minutes = BUILD_MINUTES.get(profile_name, {}).get(what)
-    how_long = f"about {minutes:g} min on 2 CPU cores" if minutes is not None else "time not measured"
+    if minutes is None:
+        how_long = "time not measured"
+    else:
+        how_long = ("under a minute" if minutes < 1 else f"about {minutes:g} min") + " on 2 CPU cores"
     print(
         f"Building {what} ({profile_name} profile): not in the artifact store yet, {how_long}; "
         f"later runs load it. Ahead of time: `python -m husky_course {command} --profile {profile_name}`.",

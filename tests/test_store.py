@@ -87,6 +87,7 @@ def test_a_build_is_announced_in_one_line_first(tmp_path, monkeypatch, capsys):
     store.get_dataset(profile, workers=1, progress=False)
     out = capsys.readouterr().out.strip().splitlines()
     assert len(out) == 1 and out[0].startswith("Building dataset (quick profile)")
-    assert "min on 2 CPU cores" in out[0] and "`python -m husky_course collect --profile quick`" in out[0]
+    assert "under a minute on 2 CPU cores" in out[0]
+    assert "`python -m husky_course collect --profile quick`" in out[0]
     store.get_dataset(profile, workers=1, progress=False)  # now it loads: nothing announced
     assert capsys.readouterr().out == ""
