@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-_EPS = 1e-15
+from ..checks import is_int
 
 
 def bernoulli_kl(q: float, p: float) -> float:
@@ -139,7 +139,7 @@ def certificate(
 
 
 def _check(n: int, delta: float) -> None:
-    if int(n) != n or n < 1:
+    if not is_int(n) or n < 1:
         raise ValueError(f"the number of samples must be a positive integer, got {n}")
     if not 0.0 < delta < 1.0:
         raise ValueError(f"a confidence parameter must lie in (0, 1), got {delta}")

@@ -40,7 +40,7 @@ from ..config import Profile
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
-from ..training.inference import single_thread
+from ..training.inference import model_device, single_thread
 from ..training.memory import load_memory
 from ..training.trainer import CheckpointError
 from .base import Planner, PlannerError, check_look_ahead, check_observation, survival_scores
@@ -50,11 +50,6 @@ REWARDS = ("applied", "next_image")
 
 def _image(obs: np.ndarray, size: int, device: torch.device | None = None) -> torch.Tensor:
     return torch.from_numpy(check_observation(obs, size))[None].to(device or "cpu")
-
-
-def _device(model: torch.nn.Module) -> torch.device:
-    """Where ``model`` runs: a decision's tensors are made there (the CPU unless moved)."""
-    return next(model.parameters()).device
 
 
 def to_device(planner: Planner, device: torch.device | str) -> Planner:
@@ -73,7 +68,7 @@ def _n_primitives(model: torch.nn.Module) -> int:
 def algorithm1(model: JointModel, obs: np.ndarray, look_ahead: int, reward: str = "applied") -> np.ndarray:
     """Algorithm 1's final ``prim_scores`` (lower is better), batched over the 25 primitives."""
     model.eval()
-    n, dev = _n_primitives(model), _device(model)
+    n, dev = _n_primitives(model), model_device(model)
     prims = torch.arange(n, device=dev)
     z = model.encoder.unchecked(_image(obs, model.encoder.size, dev)[:, None])  # _image has validated it
     scores = torch.zeros(n, device=dev)
@@ -168,7 +163,7 @@ class RNNPlanner(Planner):
             return self._act(obs)
 
     def _act(self, obs: np.ndarray) -> int:
-        dev = _device(self.model)
+        dev = model_device(self.model)
         sequences = self.sequences.to(dev)  # no copy on the CPU
         h = self.model.start(_image(obs, self.model.size, dev))
         _, col = self.model.rollout(h.expand(len(sequences), -1), sequences, images=False)
@@ -197,7 +192,7 @@ class DistilledPlanner(Planner):
     @torch.no_grad()
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         with single_thread():
-            image = _image(obs, self.model.encoder.size, _device(self.model))
+            image = _image(obs, self.model.encoder.size, model_device(self.model))
             s = self.model.survival(image)[0].cpu().numpy()
         self.last_scores = survival_scores(s, self.smooth)
         return int(np.argmin(self.last_scores))

@@ -15,7 +15,7 @@ import torch
 
 from ..config import MemoryConfig, SimConfig
 from ..models.memory import MemoryNet
-from ..training.inference import single_thread
+from ..training.inference import model_device, single_thread
 from .base import EpisodeStart, Planner, check_observation, survival_scores
 from .perception import DepthScan, EgoMap
 
@@ -64,7 +64,7 @@ class MemoryPlanner(Planner):
         if self.model is None:
             raise RuntimeError("this MemoryPlanner has no trained network")
         with single_thread():
-            dev = next(self.model.parameters()).device  # the CPU unless `evaluate --device` moved it
+            dev = model_device(self.model)  # the CPU unless `evaluate --device` moved it
             x, g = torch.from_numpy(image)[None].to(dev), torch.from_numpy(grid)[None].to(dev)
             s = self.model.survival(x, g)[0].cpu().numpy()
         self.last_scores = survival_scores(s, self.smooth)

@@ -38,10 +38,15 @@ class single_thread:  # noqa: N801 (used like a function: ``with single_thread()
         torch.set_num_threads(self.saved)
 
 
+def model_device(model: nn.Module) -> torch.device:
+    """Where ``model``'s weights are: its inputs are made there (the CPU unless it was moved)."""
+    return next(model.parameters()).device
+
+
 @contextmanager
 def on_device(model: nn.Module) -> Iterator[torch.device]:
     """Run ``model`` (in evaluation mode) on the configured device inside the block, then move it back."""
-    home = next(model.parameters()).device
+    home = model_device(model)
     device = resolve_device()
     model.to(device).eval()
     try:
