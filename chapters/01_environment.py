@@ -36,7 +36,7 @@ print("profile:", profile.name)
 # in grey (they stop the robot from driving around the course), the finish line dashed.
 #
 # In a live notebook a slider above the figure changes the world seed and the figure redraws in
-# place; in the book (no kernel) a player steps through the first eight worlds instead.
+# place; in the book (no kernel) a player steps through the first few worlds instead.
 
 # %%
 widgets.world_explorer(default_seed=0)
