@@ -13,7 +13,7 @@ $(VENV)/.installed: requirements.txt pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
 	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab, playwright"  # fail loudly if incomplete
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab, playwright, ray"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	@# JupyterLab for students: start the notebook's kernel without asking, no news pop-up
 	mkdir -p $(VENV)/share/jupyter/lab/settings
@@ -58,6 +58,7 @@ bench: install  ## speeds measured side by side: collection, decisions, training
 	$(PY) benchmarks/bench_planners.py
 	$(PY) benchmarks/bench_training.py --profile $(PROFILE)
 	$(PY) benchmarks/bench_pipeline.py --profile $(PROFILE)
+	$(PY) benchmarks/bench_engines.py --profile $(PROFILE)
 
 clean:
 	rm -rf _build

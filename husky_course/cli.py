@@ -22,11 +22,12 @@ from .data.dataset import load_dataset, stats
 from .data.io import DatasetError
 from .data.store import dataset_dir
 from .device import CHOICES, ENV, resolve_device, set_device
+from .engines import ENGINES, set_engine
 from .evaluation.episodes import eval_world_seeds, evaluate
 from .planners.base import PlannerError, check_look_ahead
 from .planners.learned import to_device
 from .planners.registry import LEARNED_PLANNERS, PLANNERS, make_planner
-from .sim.backends import BACKENDS, check_backend, make_simulator
+from .sim.backends import BACKENDS, check_backend
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", default=None, help="output directory (default: the profile's dataset in the artifact store)"
     )
     c.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    _engine_option(c)
     s = sub.add_parser("stats", help="summarise a dataset")
     s.add_argument("dir", help="dataset directory")
     s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -75,6 +77,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="where a learned planner's network decides (default cpu: one image per decision is "
         "faster on one CPU thread than a GPU round trip; auto = cuda when there is one)",
     )
+    _engine_option(e)
+    e.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="worker processes (local), or the CPUs of a local Ray cluster (default 1)",
+    )
     t = sub.add_parser("train", help="train (or load) the chapters' models into the artifact store")
     t.add_argument("model", choices=(*TRAINABLE, "all"), help="which model ('all': every one, in order)")
     t.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
@@ -86,7 +95,18 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"where to train and run batched inference (default: ${ENV}, else auto = cuda when "
         "there is one); checkpoints load on any device",
     )
+    _engine_option(t)
     return parser
+
+
+def _engine_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default=None,
+        help="where parallel work runs: local processes or Ray (default: $HUSKY_ENGINE, else local; "
+        "ray attaches to $RAY_ADDRESS when set)",
+    )
 
 
 #: what ``train`` can build, in the order the chapters need them
@@ -159,8 +179,16 @@ def _evaluate(args: argparse.Namespace) -> dict:
     eval_world_seeds(args.worlds, args.seed)  # validate before building anything
     device = resolve_device(args.device)
     planner = to_device(make_planner(args.planner, **kwargs), device)
-    with make_simulator(check_backend(args.backend), profile.sim) as sim:
-        result = evaluate(planner, args.worlds, args.seed, sim=sim, progress=not args.no_progress)
+    result = evaluate(
+        planner,
+        args.worlds,
+        args.seed,
+        progress=not args.no_progress,
+        engine=args.engine,
+        workers=args.workers,
+        backend=check_backend(args.backend),
+        config=profile.sim,
+    )
     return result.to_json()
 
 
@@ -168,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code."""
     args = build_parser().parse_args(argv)
     try:
+        if getattr(args, "engine", None) is not None:
+            set_engine(args.engine)  # reaches the labels that `train` computes without threading it through
         if args.command == "collect":
             profile = get_profile(args.profile)
             if args.out is None:  # the store's directory for exactly this spec (its name is the spec's hash)

@@ -1,8 +1,9 @@
 """The package reads as the pipeline: one-way imports between stages, no circles, no hidden deps.
 
 Stages, lowest first (a module may import from its own stage or a lower one, never a higher one):
-the floor (``config``, ``checks``, ``progress``) -> ``sim`` -> ``data`` -> ``models`` ->
-``training`` -> ``planners`` -> ``imitation`` -> ``evaluation`` -> ``course`` / ``ui`` -> ``cli``.
+the floor (``config``, ``checks``, ``progress``, ``device``, ``engines``) -> ``sim`` -> ``data`` ->
+``models`` -> ``training`` -> ``planners`` -> ``imitation`` -> ``evaluation`` -> ``course`` / ``ui`` ->
+``cli``.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import ast
 import importlib.metadata
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -24,6 +26,7 @@ STAGES = {
     "checks": 0,
     "progress": 0,
     "device": 0,
+    "engines": 0,
     "sim": 1,
     "data": 2,
     "models": 3,
@@ -148,33 +151,88 @@ def test_modules_stay_readable(name):
     assert lines <= MAX_LINES, f"{name} has {lines} lines (> {MAX_LINES}): split it by job"
 
 
-def _declared() -> set[str]:
-    deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+def _names(deps: list[str]) -> set[str]:
     return {re.split(r"[<>=!~\[; ]", d, maxsplit=1)[0].lower().replace("_", "-") for d in deps}
 
 
-def _missing(declared: set[str]) -> dict[str, list[str]]:
-    """Third-party modules the package imports whose distribution is not in ``declared``."""
-    third_party = set()
-    for path in MODULES.values():
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                third_party |= {a.name.split(".")[0] for a in node.names}
-            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-                third_party.add(node.module.split(".")[0])
-    third_party -= set(sys.stdlib_module_names) | {"husky_course"}
+def _declared() -> set[str]:
+    return _names(tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"])
+
+
+def _extras() -> set[str]:
+    """Distributions of the optional extras (``pip install -e .[ray]``), e.g. ``ray``."""
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"].get("optional-dependencies", {})
+    return _names([d for deps in extras.values() for d in deps])
+
+
+def _top_names(node: ast.AST) -> set[str]:
+    if isinstance(node, ast.Import):
+        return {a.name.split(".")[0] for a in node.names}
+    if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+        return {node.module.split(".")[0]}
+    return set()
+
+
+def _imported(source: str) -> tuple[set[str], set[str]]:
+    """Top-level names of what ``source`` imports: ``(anywhere, at import time)``.
+
+    An import inside a function runs only when the function is called (lazy); every other one
+    runs when the module is imported.
+    """
+    tree = ast.parse(source)
+    functions = [f for f in ast.walk(tree) if isinstance(f, ast.FunctionDef | ast.AsyncFunctionDef)]
+    lazy = {id(n) for f in functions for n in ast.walk(f)}
+    found, eager = set(), set()
+    for node in ast.walk(tree):
+        names = _top_names(node)
+        found |= names
+        if id(node) not in lazy:
+            eager |= names
+    return found, eager
+
+
+def _missing(declared: set[str], extras: frozenset[str] | set[str] = frozenset(), sources=None) -> dict:
+    """Third-party modules the package imports whose distribution is not declared.
+
+    A module imported when the package is imported must be in ``declared`` (the dependencies);
+    one imported only inside functions may instead be in ``extras`` (an optional extra such as
+    ``ray``, whose absence is reported when that code runs).
+    """
+    sources = [p.read_text() for p in MODULES.values()] if sources is None else sources
+    anywhere, eager = set(), set()
+    for source in sources:
+        found, at_import = _imported(source)
+        anywhere |= found
+        eager |= at_import
+    anywhere -= set(sys.stdlib_module_names) | {"husky_course"}
     dists = importlib.metadata.packages_distributions()
-    needed = {m: {d.lower().replace("_", "-") for d in dists.get(m, [m])} for m in third_party}
-    if any(m == "torch" for m in third_party):  # SummaryWriter, imported inside torch at run time
-        needed["tensorboard (torch.utils.tensorboard)"] = {"tensorboard"}
-    return {m: sorted(d) for m, d in needed.items() if not d & declared}
+
+    def dists_of(m: str) -> set[str]:
+        return {d.lower().replace("_", "-") for d in dists.get(m, [m])}
+
+    allowed = {m: declared if m in eager else declared | set(extras) for m in anywhere}
+    missing = {m: dists_of(m) for m in anywhere if not dists_of(m) & allowed[m]}
+    if any(m == "torch" for m in anywhere) and "tensorboard" not in declared:  # SummaryWriter, inside torch
+        missing["tensorboard (torch.utils.tensorboard)"] = {"tensorboard"}
+    return {m: sorted(d) for m, d in missing.items()}
 
 
 def test_runtime_imports_are_declared_dependencies():
-    """An install of the package alone (``pip install .``) must bring everything it imports."""
-    missing = _missing(_declared())
-    assert not missing, f"imported but not in pyproject's dependencies: {missing}"
+    """An install of the package alone (``pip install .``) must bring everything it imports at
+    import time; an optional extra (``.[ray]``) may be imported only inside functions."""
+    missing = _missing(_declared(), _extras())
+    assert not missing, f"imported but not in pyproject's dependencies (or, lazily, its extras): {missing}"
+    assert "ray" in _extras()
 
 
 def test_a_missing_dependency_is_caught():
     assert "torch" in _missing(_declared() - {"torch"})
+    assert "ray" in _missing(_declared())  # the Ray engine imports ray (lazily): only an extra
+    lazy, eager = "def f():\n    import ray\n", "import ray\n"
+    assert _missing(_declared(), _extras(), [lazy]) == {}
+    assert "ray" in _missing(_declared(), _extras(), [eager])  # an extra imported at import time
+
+
+def test_import_husky_course_does_not_need_ray():
+    code = "import sys, husky_course.engines, husky_course.cli; assert 'ray' not in sys.modules"
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)

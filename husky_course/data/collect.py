@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import io
 import json
-import multiprocessing as mp
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -21,7 +20,7 @@ import numpy as np
 from .. import __version__
 from ..checks import check_int, is_int
 from ..config import EVAL_SEED_BASE, Profile, SimConfig, check_profile, to_dict
-from ..progress import tqdm
+from ..engines import map_tasks, resolve_engine
 from ..sim.backends import check_backend, make_simulator
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
@@ -118,7 +117,7 @@ def _concat(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
 
 
 def _shard_job(job: tuple) -> int:
-    """Collect one shard of videos and write it atomically (runs in a worker process)."""
+    """Collect one shard of videos and write it atomically (a task: its simulator is built here)."""
     shard_path, profile, backend, seed, start, stop, shard_id = job
     with make_simulator(backend, profile.sim) as sim:
         parts = [play_video(sim, seed, v, profile.sim.max_primitives) for v in range(start, stop)]
@@ -156,11 +155,15 @@ def collect(
     workers: int = 1,
     backend: str | None = None,
     progress: bool = True,
+    engine: str | None = None,
 ) -> Path:
     """Collect (or finish collecting) a random-policy dataset into ``out`` and return ``out``.
 
     Sizes default to the profile's ``data`` config. Finished shards are kept until the final
-    arrays and ``meta.json`` are written, so an interrupted run resumes where it stopped.
+    arrays and ``meta.json`` are written, so an interrupted run resumes where it stopped. One
+    task per shard runs on ``engine`` (:func:`husky_course.engines.map_tasks`; ``ray`` writes
+    the shards from its workers, so ``out`` must be on a file system they share); the bytes are the
+    same for any engine and any number of ``workers``.
     """
     profile = check_profile(profile)
     videos = profile.data.videos if videos is None else videos
@@ -171,6 +174,7 @@ def collect(
     if not is_int(workers) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
     check_int(seed, "the collection seed")
+    engine = resolve_engine(engine)
     world_seed_for(seed, videos - 1)  # validates seed and video count
     profile = replace(
         profile, data=replace(profile.data, videos=int(videos), seed=int(seed), backend=backend)
@@ -204,23 +208,16 @@ def collect(
             continue
         jobs.append((str(path), profile, backend, seed, start, min(start + size, videos), shard_id))
     n_shards = -(-videos // size)
-    bar = tqdm(
-        total=n_shards,
-        initial=n_shards - len(jobs),
+    map_tasks(
+        _shard_job,
+        jobs,
+        engine=engine,
+        workers=workers,
         desc=f"collect ({backend})",
         unit="shard",
-        disable=not progress,
+        initial=n_shards - len(jobs),  # shards finished by an earlier, interrupted run
+        progress=progress,
     )
-    if workers == 1 or len(jobs) <= 1:
-        for job in jobs:
-            _shard_job(job)
-            bar.update()
-    else:
-        ctx = mp.get_context()  # the platform's default start method (jobs are plain, picklable tuples)
-        with ctx.Pool(min(workers, len(jobs))) as pool:
-            for _ in pool.imap_unordered(_shard_job, jobs):
-                bar.update()
-    bar.close()
     _merge(out, spec, n_shards)
     return out
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
+from ..engines import map_tasks
 from ..progress import tqdm
 from ..sim.fast import FastSimulator
 from ..sim.lattice import expand, survival
@@ -90,10 +91,14 @@ def survival_at(
     config: SimConfig | None = None,
     workers: int = 2,
     progress: bool = True,
+    engine: str | None = None,
 ) -> np.ndarray:
-    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose)`` states, in parallel."""
-    import multiprocessing as mp
+    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose)`` states, in parallel.
 
+    Chunks of states (sorted by world, so each task loads a world once) run as tasks on
+    ``engine`` (default :func:`husky_course.engines.resolve_engine`: ``--engine``, else
+    ``$HUSKY_ENGINE``, else local processes); the labels do not depend on the engine or ``workers``.
+    """
     if horizon < 1:
         raise ValueError(f"horizon must be >= 1, got {horizon}")
     world_seeds = np.asarray(world_seeds)
@@ -102,15 +107,17 @@ def survival_at(
     chunks = np.array_split(order, max(1, len(order) // 400))
     jobs = [(c, world_seeds[c], poses[c], horizon, config) for c in chunks if len(c)]
     out = np.zeros((len(poses), (config or SimConfig()).primitives.n), np.int8)
-    ctx = mp.get_context()  # the platform's default start method
-    with ctx.Pool(max(1, workers)) as pool:
-        for rows, part in tqdm(
-            pool.imap_unordered(_survival_job, jobs),
-            total=len(jobs),
-            desc="survival labels",
-            disable=not progress,
-        ):
-            out[rows] = part
+    parts = map_tasks(
+        _survival_job,
+        jobs,
+        engine=engine,
+        workers=max(1, workers),
+        desc="survival labels",
+        unit="chunk",
+        progress=progress,
+    )
+    for rows, part in parts:
+        out[rows] = part
     return out
 
 

@@ -15,11 +15,13 @@ from typing import Any
 import numpy as np
 
 from ..checks import check_int, is_int
-from ..config import EVAL_SEED_BASE
+from ..config import EVAL_SEED_BASE, SimConfig
+from ..engines import ENGINE, map_tasks, resolve_engine
 from ..planners.base import Planner, episode_start
 from ..progress import tqdm
-from ..sim.backends import make_simulator
+from ..sim.backends import check_backend, make_simulator
 from ..sim.base import Simulator
+from ..sim.fast import FastSimulator
 from .statistics import clopper_pearson
 
 EVAL_SET_STRIDE = 1_000_000
@@ -186,6 +188,31 @@ class EvalResult:
         return out
 
 
+def _backend_of(sim: Simulator) -> str:
+    """The backend name that rebuilds ``sim`` in a worker (only the course's own two can be)."""
+    if type(sim) is FastSimulator:
+        return "fast"
+    if type(sim).__name__ == "PyBulletSimulator":
+        return "pybullet"
+    raise ValueError(
+        f"a {type(sim).__name__} cannot be rebuilt in a worker: evaluate it with workers=1 and the local "
+        "engine, or pass backend='fast' or 'pybullet' instead of sim"
+    )
+
+
+def _world_chunk(planner: Planner, job: tuple) -> tuple[list[Episode], list[bool]]:
+    """A task: episodes of ``planner`` in a chunk of worlds, on a simulator built here."""
+    backend, config, world_seeds, limit = job
+    episodes: list[Episode] = []
+    crossable: list[bool] = []
+    with make_simulator(backend, config) as sim:
+        for world_seed in world_seeds:
+            episodes.append(run_episode(planner, sim, int(world_seed), limit))
+            if hasattr(planner, "crossable"):
+                crossable.append(bool(planner.crossable))
+    return episodes, crossable
+
+
 def evaluate(
     planner: Planner,
     worlds: int,
@@ -193,27 +220,64 @@ def evaluate(
     sim: Simulator | None = None,
     progress: bool = True,
     max_primitives: int | None = None,
+    engine: str | None = None,
+    workers: int = 1,
+    backend: str = "fast",
+    config: SimConfig | None = None,
+    worlds_per_task: int | None = None,
 ) -> EvalResult:
     """Run ``planner`` on evaluation set ``seed`` (``worlds`` worlds) and summarise.
 
-    ``sim`` defaults to a new fast simulator (closed afterwards); ``max_primitives`` to the
-    simulator's config (10). ``crossable_rate`` is filled in when the planner reports
-    ``crossable`` (the oracle).
+    ``sim`` defaults to a new simulator of ``backend`` with ``config`` (closed afterwards);
+    ``max_primitives`` to the simulator's config (10). ``crossable_rate`` is filled in when the
+    planner reports ``crossable`` (the oracle).
+
+    With the local engine and one worker (the defaults) the worlds run here, one after the other,
+    in ``sim``. Otherwise (``engine="ray"``, or ``workers > 1``) they run as tasks of
+    ``worlds_per_task`` worlds (default :class:`~husky_course.config.EngineConfig`) on
+    :func:`husky_course.engines.map_tasks`: the planner is pickled to the workers and each task
+    builds its own simulator from the backend's name and config (those of ``sim`` when given).
+    Every planner starts each episode afresh (``reset``), so every field but the timings
+    (``ms_per_decision``, ``ms_per_reset``) is the same number on any engine.
     """
     seeds = eval_world_seeds(worlds, seed)
-    own = sim is None
-    sim = make_simulator("fast") if sim is None else sim
-    limit = sim.config.max_primitives if max_primitives is None else max_primitives
-    episodes: list[Episode] = []
-    crossable: list[bool] = []
-    try:
-        for world_seed in tqdm(seeds, desc=f"evaluate {planner.name}", unit="world", disable=not progress):
-            episodes.append(run_episode(planner, sim, int(world_seed), limit))
-            if hasattr(planner, "crossable"):
-                crossable.append(bool(planner.crossable))
-    finally:
-        if own:
-            sim.close()
+    engine = resolve_engine(engine)
+    workers = check_int(workers, "workers", 1)
+    if engine == "local" and workers == 1:
+        own = sim is None
+        sim = make_simulator(backend, config) if sim is None else sim
+        limit = sim.config.max_primitives if max_primitives is None else max_primitives
+        episodes: list[Episode] = []
+        crossable: list[bool] = []
+        bar = tqdm(seeds, desc=f"evaluate {planner.name}", unit="world", disable=not progress)
+        try:
+            for world_seed in bar:
+                episodes.append(run_episode(planner, sim, int(world_seed), limit))
+                if hasattr(planner, "crossable"):
+                    crossable.append(bool(planner.crossable))
+        finally:
+            if own:
+                sim.close()
+    else:
+        if sim is not None:
+            backend, config = _backend_of(sim), sim.config
+        config = config or SimConfig()
+        limit = config.max_primitives if max_primitives is None else max_primitives
+        size = check_int(worlds_per_task or ENGINE.worlds_per_task, "worlds_per_task", 1, EVAL_SET_STRIDE)
+        chunks = [seeds[i : i + size] for i in range(0, len(seeds), size)]
+        parts = map_tasks(
+            _world_chunk,
+            [(check_backend(backend), config, chunk, limit) for chunk in chunks],
+            engine=engine,
+            workers=workers,
+            shared=planner,
+            desc=f"evaluate {planner.name} ({engine})",
+            unit="world",
+            sizes=[len(c) for c in chunks],
+            progress=progress,
+        )
+        episodes = [e for part, _ in parts for e in part]
+        crossable = [c for _, part in parts for c in part]
     n = len(episodes)
     successes = sum(e.success for e in episodes)
     collisions = sum(e.collided for e in episodes)
