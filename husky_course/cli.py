@@ -16,6 +16,7 @@ import json
 import sys
 from dataclasses import replace
 
+from .checks import check_int
 from .config import PROFILES, ConfigError, get_profile
 from .data.collect import collect
 from .data.dataset import load_dataset, stats
@@ -96,6 +97,16 @@ def build_parser() -> argparse.ArgumentParser:
         "there is one); checkpoints load on any device",
     )
     _engine_option(t)
+    g = sub.add_parser(
+        "certify",
+        help="chapter 9's PAC-Bayes certificate for the memory student, at the profile's scale or another",
+    )
+    g.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
+    g.add_argument("--worlds", type=int, default=None, help="N, training worlds (default: the profile's)")
+    g.add_argument("--heldout-worlds", type=int, default=None, help="held-out worlds (default: profile)")
+    g.add_argument("--workers", type=int, default=2, help="local processes, or a local Ray cluster's CPUs")
+    g.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    _engine_option(g)
     return parser
 
 
@@ -120,6 +131,7 @@ TRAINABLE = (
     "rnn",
     "distilled",
     "memory",
+    "certificate",
 )
 
 
@@ -143,6 +155,12 @@ def _train(args: argparse.Namespace) -> dict:
                 "rounds": student.rounds,
                 "path": student.path,
             }
+            continue
+        if name == "certificate":  # chapter 9: the memory student's PAC-Bayes certificate
+            from .evaluation.certificate import get_certificate
+
+            found = get_certificate(profile, progress)
+            out[name] = {**found.to_json(), "path": found.path}
             continue
         if name == "diagnosis":  # chapter 4's variants and probes: many small runs, one JSON
             found = get_diagnosis(profile, progress)
@@ -192,6 +210,22 @@ def _evaluate(args: argparse.Namespace) -> dict:
     return result.to_json()
 
 
+def _certify(args: argparse.Namespace) -> dict:
+    """Run the ``certify`` subcommand: the certificate at the asked scale (its own artifact)."""
+    from .evaluation.certificate import get_certificate
+
+    profile = get_profile(args.profile)
+    g = profile.guarantee
+    worlds = g.worlds if args.worlds is None else check_int(args.worlds, "--worlds", 1, 10**6)
+    heldout = g.heldout_worlds if args.heldout_worlds is None else args.heldout_worlds
+    heldout = check_int(heldout, "--heldout-worlds", 1, 10**6)
+    finetune = min(g.finetune_worlds, worlds)
+    g = replace(g, worlds=worlds, heldout_worlds=heldout, finetune_worlds=finetune)
+    workers = check_int(args.workers, "--workers", 1, 10**4)
+    found = get_certificate(replace(profile, guarantee=g), not args.no_progress, workers=workers)
+    return {**found.to_json(), "path": found.path}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code."""
     args = build_parser().parse_args(argv)
@@ -227,6 +261,8 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{key:28s} {value}")
         elif args.command == "train":
             print(json.dumps(_train(args), indent=1))
+        elif args.command == "certify":
+            print(json.dumps(_certify(args), indent=1))
         elif args.command == "evaluate":
             result = _evaluate(args)
             if args.json:

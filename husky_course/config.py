@@ -227,11 +227,39 @@ class MemoryConfig:
 
 
 @dataclass(frozen=True)
+class GuaranteeConfig:
+    """The PAC-Bayes certificate of chapter 9 (see :mod:`husky_course.evaluation.certificate`).
+
+    The policy is the memory student with a Gaussian over the weights of its last layer. The prior
+    is centred on the student as DAgger trained it (on its own worlds, collection seed
+    ``MemoryConfig.collection_seed``), with standard deviation ``prior_scale`` times the RMS of
+    those weights, fixed before any certificate world is seen. The posterior is fitted on
+    ``finetune_worlds`` of the ``worlds`` certificate training worlds (collection seed
+    ``collection_seed``, a seed nothing else uses) and certified on all of them with
+    ``draws_per_world`` weight vectors drawn per world; it is then measured on ``heldout_worlds``
+    evaluation worlds of evaluation set ``heldout_set`` (0 reports the planners' table, 1 tunes).
+    """
+
+    collection_seed: int = 3
+    worlds: int = 5_000  #: N, the certificate's training worlds
+    finetune_worlds: int = 500  #: the first of them, whose states the posterior is fitted on
+    draws_per_world: int = 1
+    heldout_worlds: int = 10_000
+    heldout_set: int = 2
+    prior_scale: float = 0.5
+    delta: float = 0.009  #: the PAC-Bayes bound's confidence parameter
+    delta_prime: float = 0.001  #: the sample-convergence bound's (together: 99% confidence)
+    seed: int = 0  #: weight draws and the posterior's training
+    train: TrainConfig = field(default_factory=lambda: TrainConfig(lr=3e-3, batch_size=256, epochs=30))
+
+
+@dataclass(frozen=True)
 class EvalPlan:
     """How many held-out worlds the planning chapters evaluate on."""
 
     worlds: int = 500
     seed: int = 0  #: which held-out set (see :func:`husky_course.evaluation.episodes.eval_world_seeds`)
+    workers: int = 2  #: local processes the chapters evaluate with (every result but timing is the same)
 
 
 @dataclass(frozen=True)
@@ -246,6 +274,7 @@ class Profile:
     model: ModelConfig = field(default_factory=ModelConfig)
     calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
+    guarantee: GuaranteeConfig = field(default_factory=GuaranteeConfig)
 
     @property
     def dims(self) -> ModelDims:
@@ -271,6 +300,7 @@ def _profiles() -> dict[str, Profile]:
             EvalPlan(worlds=60),
             calibration=CalibrationConfig(videos=500),
             memory=MemoryConfig(worlds_per_round=300, train=TrainConfig(epochs=10, patience=3)),
+            guarantee=GuaranteeConfig(worlds=400, finetune_worlds=150, heldout_worlds=1_000),
         ),
         "full": Profile("full", sim, DataConfig(videos=10_000)),
     }
@@ -283,10 +313,12 @@ BUILD_MINUTES: dict[str, dict[str, float]] = {
     "quick": {
         "dataset": 0.1, "encoder_decoder": 0.7, "reward_net": 0.1, "safety_image": 0.2, "safety_prim": 0.2,
         "joint": 0.4, "diagnosis": 0.3, "rnn": 0.5, "survival labels": 0.2, "distilled": 0.3, "memory": 2,
+        "certificate": 0.4,
     },
     "full": {
         "dataset": 0.2, "encoder_decoder": 6, "reward_net": 0.3, "safety_image": 2.5, "safety_prim": 2.5,
         "joint": 5, "diagnosis": 2.5, "rnn": 7, "survival labels": 0.5, "distilled": 5.5, "memory": 4,
+        "certificate": 4.5,
     },
 }
 
@@ -349,6 +381,7 @@ __all__ = [
     "DataConfig",
     "EvalPlan",
     "MemoryConfig",
+    "GuaranteeConfig",
     "ModelConfig",
     "OracleConfig",
     "ModelDims",

@@ -92,3 +92,32 @@ def test_more_worlds_tighten_the_bound_and_kl_loosens_it():
         pac_bayes_kl_bound(0.1, -1.0, 100, 0.01)
     with pytest.raises(ValueError):
         certificate(np.array([[0.5, 1.5]]), 1.0)
+
+
+def test_per_world_draws_bound_the_training_cost_and_the_true_cost():
+    """One weight vector per world (the course's protocol, ``draws="per_world"``).
+
+    On fixed worlds u_i, C_S = mean_i P(theta > logit u_i) exactly; the sample-convergence bound at
+    delta' = 0.2 must cover it in at least 80% of independent weight draws (it covers far more: the
+    constant is the lab's two-sided one), and the whole certificate must cover the true cost.
+    """
+    mu_q, s_q = -1.5, 0.3
+    kl = gaussian_kl([mu_q], [2 * math.log(s_q)], [0.0], [0.0])
+    rng = np.random.default_rng(1)
+    n_worlds, trials = 2000, 300
+    u = rng.random(n_worlds)
+    logit = np.log(u / (1 - u))
+    train_cost = float(np.mean([0.5 * math.erfc((x - mu_q) / (s_q * math.sqrt(2))) for x in logit]))
+    covered = 0
+    for _ in range(trials):
+        theta = rng.normal(mu_q, s_q, n_worlds)
+        costs = (u < 1 / (1 + np.exp(-theta)))[None, :].astype(float)
+        cert = certificate(costs, kl, delta=0.05, delta_prime=0.2, draws="per_world")
+        covered += cert.train_cost_bound >= train_cost
+        assert cert.draws == "per_world" and cert.n_policies == 1 and cert.n_worlds == n_worlds
+    assert covered / trials >= 0.8, f"covered in {covered}/{trials}"
+    # per-world draws are far tighter than one shared vector for the same number of episodes
+    shared = certificate(costs, kl, delta=0.05, delta_prime=0.2)
+    assert cert.train_cost_bound < shared.train_cost_bound
+    with pytest.raises(ValueError, match="draws"):
+        certificate(costs, kl, draws="each")

@@ -109,3 +109,30 @@ def check_bonferroni(collisions: int, worlds: int, candidates: int, bound: float
             f"{bound} is not the corrected bound{hint}: use confidence 1 - 0.05 / {candidates}"
         )
     return _ok(f"at most {want:.2%} collisions, for the best of {candidates} at 95% overall")
+
+
+def check_kl_inverse(q: float, c: float, answer: float) -> bool:
+    """Chapter 9, exercise 1: the largest ``p`` with ``kl(q || p) <= c``, to 1e-4."""
+    from ..evaluation.pac_bayes import bernoulli_kl, kl_inverse
+
+    want = kl_inverse(q, c)
+    got = float(answer)
+    if not math.isclose(got, want, abs_tol=1e-4):
+        hint = (
+            "below q: the inverse looks for p >= q" if got < q else
+            f"kl(q || your p) = {bernoulli_kl(q, min(max(got, 0.0), 1.0)):.4g}, not {c}"
+        )
+        raise AssertionError(f"{got} is not kl_inverse({q}, {c}) ({hint})")
+    return _ok(f"kl_inverse({q}, {c}) = {want:.4f}")
+
+
+def check_worlds_for_pac_bayes(train_cost: float, kl: float, bound: float, n: int, delta: float) -> bool:
+    """Chapter 9, exercise 2: fewest worlds ``n`` for which the PAC-Bayes-kl bound is at most ``bound``."""
+    from ..evaluation.pac_bayes import pac_bayes_kl_bound
+
+    n = int(n)
+    if n < 1 or pac_bayes_kl_bound(train_cost, kl, n, delta) > bound:
+        raise AssertionError(f"with {n} worlds the bound is above {bound}: more worlds are needed")
+    if n > 1 and pac_bayes_kl_bound(train_cost, kl, n - 1, delta) <= bound:
+        raise AssertionError(f"{n - 1} worlds already give a bound of at most {bound}: find the fewest")
+    return _ok(f"{n} worlds: bound {pac_bayes_kl_bound(train_cost, kl, n, delta):.4f} <= {bound}")

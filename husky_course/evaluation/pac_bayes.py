@@ -13,11 +13,16 @@ where ``C_S(P)`` is the average cost on the training worlds and ``kl`` the KL di
 Bernoulli distributions. Inverting ``kl`` in its second argument (:func:`kl_inverse`) turns this
 into an upper bound on ``C(P)``.
 
-``C_S(P)`` is itself an expectation over weights; it is estimated from ``L`` weight vectors drawn
-from ``P`` (each run on all ``N`` worlds). Their average costs are independent values in
-``[0, 1]`` with mean ``C_S(P)``, so with probability at least ``1 - delta_prime``,
-``C_S(P) <= kl_inverse(C_hat, log(2 / delta_prime) / L)`` (sample convergence). Both together
-hold with probability at least ``1 - delta - delta_prime`` (:func:`certificate`).
+``C_S(P)`` is itself an expectation over weights; it is estimated from weight vectors drawn from
+``P`` (sample convergence). The lab draws ``L`` vectors and runs each on all ``N`` worlds: their
+average costs are ``L`` independent values in ``[0, 1]`` with mean ``C_S(P)``, so with probability
+at least ``1 - delta_prime``, ``C_S(P) <= kl_inverse(C_hat, log(2 / delta_prime) / L)``. The
+course instead draws a fresh vector for every (world, draw) pair (``draws="per_world"``): then all
+``L * N`` costs are independent (given the worlds), each in ``[0, 1]``, and their mean's expectation
+is ``C_S(P)``; Hoeffding's inequality in its kl form holds for independent variables that are not
+identically distributed, so the same bound holds with ``L * N`` in place of ``L`` -- far tighter
+for the same number of episodes. Both bounds together hold with probability at least
+``1 - delta - delta_prime`` (:func:`certificate`).
 """
 
 from __future__ import annotations
@@ -97,14 +102,15 @@ def sample_convergence_bound(sampled_cost: float, n_policies: int, delta_prime: 
 class Certificate:
     """A PAC-Bayes certificate and the numbers it was made of (all costs in [0, 1])."""
 
-    sampled_cost: float  #: average training cost of the L sampled policies
+    sampled_cost: float  #: average training cost of the sampled policies
     train_cost_bound: float  #: sample-convergence bound on C_S(P)
     bound: float  #: the certificate: C(P) <= bound with probability >= confidence
     kl: float
     n_worlds: int
-    n_policies: int
+    n_policies: int  #: weight vectors drawn per world
     delta: float
     delta_prime: float
+    draws: str = "shared"  #: "shared" (the lab's: each vector on every world) or "per_world"
 
     @property
     def confidence(self) -> float:
@@ -115,9 +121,16 @@ class Certificate:
 
 
 def certificate(
-    costs: np.ndarray, kl: float, delta: float = 0.009, delta_prime: float = 0.001
+    costs: np.ndarray, kl: float, delta: float = 0.009, delta_prime: float = 0.001, draws: str = "shared"
 ) -> Certificate:
-    """The certificate from a ``(L, N)`` array of costs: ``L`` sampled policies on ``N`` worlds."""
+    """The certificate from a ``(L, N)`` array of costs on ``N`` worlds.
+
+    ``draws="shared"``: row ``l`` is one weight vector run on every world (the lab's protocol,
+    ``L`` independent samples); ``draws="per_world"``: every entry had its own vector (``L * N``
+    independent samples; see the module docstring).
+    """
+    if draws not in ("shared", "per_world"):
+        raise ValueError(f"draws must be 'shared' or 'per_world', got {draws!r}")
     costs = np.asarray(costs, np.float64)
     if costs.ndim != 2 or costs.size == 0:
         raise ValueError(f"costs must be a non-empty (policies, worlds) array, got shape {costs.shape}")
@@ -125,7 +138,8 @@ def certificate(
         raise ValueError("costs must lie in [0, 1]")
     n_policies, n_worlds = costs.shape
     sampled = float(costs.mean())
-    train_bound = sample_convergence_bound(sampled, n_policies, delta_prime)
+    samples = n_policies if draws == "shared" else n_policies * n_worlds
+    train_bound = sample_convergence_bound(sampled, samples, delta_prime)
     return Certificate(
         sampled_cost=sampled,
         train_cost_bound=train_bound,
@@ -135,6 +149,7 @@ def certificate(
         n_policies=n_policies,
         delta=delta,
         delta_prime=delta_prime,
+        draws=draws,
     )
 
 

@@ -60,3 +60,37 @@ class MemoryNet(nn.Module):
         """BCE between the predicted and the simulator's survival fraction, every primitive."""
         target = batch["survival"].float() / self.horizon
         return F.binary_cross_entropy_with_logits(self.logits(batch["image"], batch["map"]), target)
+
+
+def last_layer(model: MemoryNet) -> nn.Linear:
+    """The student's output layer (hidden -> one value per primitive), what the certificate randomises."""
+    layer = model.head[-1]
+    assert isinstance(layer, nn.Linear)
+    return layer
+
+
+def get_last_layer(model: MemoryNet) -> Tensor:
+    """The output layer's weights then biases as one flat float32 vector (a copy)."""
+    layer = last_layer(model)
+    return torch.cat([layer.weight.detach().reshape(-1), layer.bias.detach()]).float().cpu().clone()
+
+
+@torch.no_grad()
+def set_last_layer(model: MemoryNet, w: Tensor) -> None:
+    """Write a flat vector from :func:`get_last_layer` back into the output layer."""
+    layer = last_layer(model)
+    n_w = layer.weight.numel()
+    size = n_w + layer.bias.numel()
+    if w.shape != (size,):
+        raise ValueError(f"expected a vector of {size} values, got shape {tuple(w.shape)}")
+    layer.weight.copy_(w[:n_w].view_as(layer.weight))
+    layer.bias.copy_(w[n_w:])
+
+
+@torch.no_grad()
+def features(model: MemoryNet, image: Tensor, grid: Tensor) -> Tensor:
+    """What the output layer sees: the hidden activations ``(B, hidden)`` before it."""
+    if grid.dim() == 3:
+        grid = grid.unsqueeze(1)
+    x = torch.cat([model.encoder(image), model.map_net(grid.float())], dim=1)
+    return model.head[:-1](x)
