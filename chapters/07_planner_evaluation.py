@@ -48,6 +48,7 @@ from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 N = profile.eval.worlds
+W = profile.eval.workers  # worlds are evaluated in W processes; every number but the timings is the same for any W
 LOOK_AHEAD = 2
 
 
@@ -90,8 +91,8 @@ widgets.planner_stepper(lambda name, k: planner(name, k),
 
 # %%
 NAMES = ["random", "heuristic", "lookahead", "rnn", "distilled", "oracle"]
-results = {name: evaluate(planner(name), N, seed=profile.eval.seed) for name in NAMES}
-lit = evaluate(planner("lookahead", reward="next_image"), N, seed=profile.eval.seed)
+results = {name: evaluate(planner(name), N, seed=profile.eval.seed, workers=W) for name in NAMES}
+lit = evaluate(planner("lookahead", reward="next_image"), N, seed=profile.eval.seed, workers=W)
 rows = []
 for name, r in [*results.items(), ("lookahead (literal line 11)", lit)]:
     j = r.to_json()
@@ -147,8 +148,8 @@ display(Markdown(
 # the halved score of continuing from the best one so far.
 
 # %%
-sweep = {k: evaluate(planner("lookahead", k), N, seed=profile.eval.seed, progress=False) for k in range(5)}
-rnn_sweep = {k: evaluate(planner("rnn", k), N, seed=profile.eval.seed, progress=False) for k in range(3)}
+sweep = {k: evaluate(planner("lookahead", k), N, seed=profile.eval.seed, progress=False, workers=W) for k in range(5)}
+rnn_sweep = {k: evaluate(planner("rnn", k), N, seed=profile.eval.seed, progress=False, workers=W) for k in range(3)}
 fig, ax = plt.subplots(figsize=(6, 3.5))
 for label, sw in (("lookahead (Algorithm 1)", sweep), ("rnn", rnn_sweep)):
     ks = list(sw)

@@ -39,6 +39,7 @@ from husky_course.ui.plotting import markdown_table
 
 profile = get_profile()
 N, REPORT = profile.eval.worlds, profile.eval.seed  # the reporting set: nothing is tuned on it
+W = profile.eval.workers  # worlds are evaluated in W processes; every number but the timings is the same for any W
 sim = FastSimulator(profile.sim)
 print(f"profile {profile.name}: {N} held-out worlds of evaluation set {REPORT}")
 
@@ -54,7 +55,7 @@ print(f"profile {profile.name}: {N} held-out worlds of evaluation set {REPORT}")
 
 # %%
 ceiling = {
-    name: evaluate(p, N, REPORT, sim=sim, progress=False) for name, p in [
+    name: evaluate(p, N, REPORT, sim=sim, progress=False, workers=W) for name, p in [
         ("seen now (perfect perception)", SeenObstaclesPlanner(memory=False)),
         ("seen so far (perfect perception)", SeenObstaclesPlanner(memory=True)),
         ("oracle (every obstacle)", make_planner("oracle"))]
@@ -148,7 +149,7 @@ for name in names:
         p = memory_planner
     else:
         p = make_planner(name)
-    results[name] = evaluate(p, N, REPORT, sim=sim, progress=False)
+    results[name] = evaluate(p, N, REPORT, sim=sim, progress=False, workers=W)
 rows = [{"planner": n, "success": r.success_rate,
          "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]",
          "collisions <= (95%)": r.collision_rate_upper95, "ms / decision": f"{r.ms_per_decision:.2f}"}
