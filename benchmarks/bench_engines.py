@@ -3,7 +3,7 @@
 Run: ``python benchmarks/bench_engines.py [--planner heuristic] [--worlds 400] [--workers 2]``.
 Evaluates one planner on the same held-out worlds with the local engine (1 worker, then a pool of
 ``--workers`` processes) and on a local Ray cluster of ``--workers`` CPUs (started and warmed up
-before the clock starts; its start-up time is printed apart), checks that the numbers agree, and
+before the clock starts: its start-up time is printed apart), checks that the numbers agree, and
 prints worlds/s and the ratios. Then times ``--noop-tasks`` tasks that do nothing on Ray (ms/task:
 what one task costs beyond its work) and extrapolates, on paper, to a cluster of N machines.
 """
@@ -47,8 +47,9 @@ def main() -> None:
     t0 = time.perf_counter()
     map_tasks(abs, range(4 * w), engine="ray", workers=w, progress=False)  # start the cluster
     startup = time.perf_counter() - t0
-    # warm up: every worker has loaded the library and unpickled the planner once
-    evaluate(planner, 2 * w, args.seed + 1, progress=False, engine="ray", workers=w, worlds_per_task=1)
+    # warm up (not timed): every worker has imported the library (and torch) and unpickled the planner
+    warm = 2 * w * ENGINE.worlds_per_task
+    evaluate(planner, warm, args.seed + 1, progress=False, engine="ray", workers=w)
     rows[f"ray, {w} CPUs"] = timed_eval(planner, args.worlds, args.seed, "ray", w)
 
     base = rows["local, 1 worker"][0]
@@ -75,7 +76,7 @@ def main() -> None:
     share = 100 * per_task_ms / task_ms
     print(
         f"Ray overhead: {per_task_ms:.2f} ms per no-op task ({n} tasks, {w} CPUs); a task of "
-        f"{ENGINE.worlds_per_task} worlds does {task_ms:.0f} ms of work ({share:.1f}% overhead)"
+        f"{ENGINE.worlds_per_task} worlds does {task_ms:.0f} ms of work ({share:.2f}% overhead)"
     )
     per_cpu = args.worlds / t_ray / w
     dispatch = 1e3 / per_task_ms * ENGINE.worlds_per_task  # worlds/s one driver can hand out

@@ -206,6 +206,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
         workers=args.workers,
         backend=check_backend(args.backend),
         config=profile.sim,
+        keep_paths=False,  # only the summary is printed
     )
     return result.to_json()
 

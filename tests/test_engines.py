@@ -166,8 +166,9 @@ def test_evaluation_is_the_same_numbers_on_any_engine(name, ray_cluster):
     assert _json(on_ray) == _json(here)
     assert [e.actions for e in on_ray.episodes] == [e.actions for e in here.episodes]
     if name in ("random", "memory"):  # a local pool too: worlds in another order, other processes
-        pooled = evaluate(planner, 20, seed=3, progress=False, workers=2, worlds_per_task=7)
+        pooled = evaluate(planner, 20, seed=3, progress=False, workers=2, worlds_per_task=7, keep_paths=False)
         assert _json(pooled) == _json(here)
+        assert all(len(e.path) == 0 for e in pooled.episodes) and len(here.episodes[0].path) > 0
 
 
 def _ray_task_pids() -> list[int]:

@@ -9,7 +9,7 @@ Evaluation set ``s`` of size ``n`` is the worlds ``EVAL_SEED_BASE + s * 1_000_00
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -200,14 +200,19 @@ def _backend_of(sim: Simulator) -> str:
     )
 
 
+def _slim(episode: Episode, keep_path: bool) -> Episode:
+    """``episode``, or a copy without its played-back ``path`` (most of its bytes)."""
+    return episode if keep_path else replace(episode, path=episode.path[:0])
+
+
 def _world_chunk(planner: Planner, job: tuple) -> tuple[list[Episode], list[bool]]:
     """A task: episodes of ``planner`` in a chunk of worlds, on a simulator built here."""
-    backend, config, world_seeds, limit = job
+    backend, config, world_seeds, limit, keep_paths = job
     episodes: list[Episode] = []
     crossable: list[bool] = []
     with make_simulator(backend, config) as sim:
         for world_seed in world_seeds:
-            episodes.append(run_episode(planner, sim, int(world_seed), limit))
+            episodes.append(_slim(run_episode(planner, sim, int(world_seed), limit), keep_paths))
             if hasattr(planner, "crossable"):
                 crossable.append(bool(planner.crossable))
     return episodes, crossable
@@ -225,6 +230,7 @@ def evaluate(
     backend: str = "fast",
     config: SimConfig | None = None,
     worlds_per_task: int | None = None,
+    keep_paths: bool = True,
 ) -> EvalResult:
     """Run ``planner`` on evaluation set ``seed`` (``worlds`` worlds) and summarise.
 
@@ -238,7 +244,9 @@ def evaluate(
     :func:`husky_course.engines.map_tasks`: the planner is pickled to the workers and each task
     builds its own simulator from the backend's name and config (those of ``sim`` when given).
     Every planner starts each episode afresh (``reset``), so every field but the timings
-    (``ms_per_decision``, ``ms_per_reset``) is the same number on any engine.
+    (``ms_per_decision``, ``ms_per_reset``) is the same number on any engine. ``keep_paths=False``
+    drops each episode's played-back ``path`` (about 20 kB a world, more than all the rest): what a
+    summary of 100,000 worlds, which never plots them, should ask for.
     """
     seeds = eval_world_seeds(worlds, seed)
     engine = resolve_engine(engine)
@@ -252,7 +260,7 @@ def evaluate(
         bar = tqdm(seeds, desc=f"evaluate {planner.name}", unit="world", disable=not progress)
         try:
             for world_seed in bar:
-                episodes.append(run_episode(planner, sim, int(world_seed), limit))
+                episodes.append(_slim(run_episode(planner, sim, int(world_seed), limit), keep_paths))
                 if hasattr(planner, "crossable"):
                     crossable.append(bool(planner.crossable))
         finally:
@@ -267,7 +275,7 @@ def evaluate(
         chunks = [seeds[i : i + size] for i in range(0, len(seeds), size)]
         parts = map_tasks(
             _world_chunk,
-            [(check_backend(backend), config, chunk, limit) for chunk in chunks],
+            [(check_backend(backend), config, chunk, limit, bool(keep_paths)) for chunk in chunks],
             engine=engine,
             workers=workers,
             shared=planner,
