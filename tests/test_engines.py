@@ -56,6 +56,12 @@ def _square_plus(offset: int, x: int) -> int:
     return x * x + offset
 
 
+def _torch_threads(_: int) -> int:
+    import torch
+
+    return torch.get_num_threads()
+
+
 # Ray workers cannot import this test module: send its functions by value (the library's are
 # imported by the workers from the installed package)
 ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
@@ -109,6 +115,16 @@ def test_results_come_back_in_task_order(ray_cluster):
     assert map_tasks(_square_plus, tasks, engine="local", workers=2, shared=5, progress=False) == expected
     assert map_tasks(_square_plus, tasks, engine="ray", workers=2, shared=5, progress=False) == expected
     assert map_tasks(abs, [], engine="ray", progress=False) == []
+
+
+def test_every_task_runs_with_one_torch_thread(ray_cluster):
+    import torch
+
+    before = torch.get_num_threads()
+    assert map_tasks(_torch_threads, [0, 1], engine="ray", workers=2, progress=False) == [1, 1]
+    assert map_tasks(_torch_threads, [0, 1], engine="local", workers=2, progress=False) == [1, 1]
+    assert map_tasks(_torch_threads, [0, 1], engine="local", workers=1, progress=False) == [1, 1]
+    assert torch.get_num_threads() == before  # serial work in this process: restored afterwards
 
 
 def test_collection_is_the_same_bytes_on_ray(tmp_path, ray_cluster):
