@@ -230,14 +230,11 @@ class MemoryConfig:
 class GuaranteeConfig:
     """The PAC-Bayes certificate of chapter 9 (see :mod:`husky_course.evaluation.certificate`).
 
-    The policy is the memory student with a Gaussian over the weights of its last layer. The prior
-    is centred on the student as DAgger trained it (on its own worlds, collection seed
-    ``MemoryConfig.collection_seed``), with standard deviation ``prior_scale`` times the RMS of
-    those weights, fixed before any certificate world is seen. The posterior is fitted on
-    ``finetune_worlds`` of the ``worlds`` certificate training worlds (collection seed
-    ``collection_seed``, a seed nothing else uses) and certified on all of them with
-    ``draws_per_world`` weight vectors drawn per world; it is then measured on ``heldout_worlds``
-    evaluation worlds of evaluation set ``heldout_set`` (0 reports the planners' table, 1 tunes).
+    A Gaussian over the memory student's last layer. Prior: centred on the DAgger weights, deviation
+    ``prior_scale`` times their RMS, fixed before any certificate world is seen. Posterior: fitted on
+    ``finetune_worlds`` of the ``worlds`` training worlds (collection ``collection_seed``, used by
+    nothing else), certified on all of them with ``draws_per_world`` draws per world, then measured
+    on ``heldout_worlds`` of evaluation set ``heldout_set`` (0 reports the planners, 1 tunes).
     """
 
     collection_seed: int = 3
