@@ -12,6 +12,7 @@ import argparse
 import tempfile
 import time
 
+from husky_course.config import get_profile
 from husky_course.data.collect import collect
 from husky_course.data.dataset import load_dataset, stats
 
@@ -21,7 +22,7 @@ def timed(videos: int, backend: str, workers: int) -> tuple[float, dict]:
         t0 = time.perf_counter()
         out = collect(
             tmp + "/d",
-            "full",
+            get_profile("full"),
             videos=videos,
             seed=0,
             workers=workers,
