@@ -133,3 +133,13 @@ def test_chapter_9_exercise_checks():
         exercises.check_worlds_for_pac_bayes(0.2, 20, 0.25, n - 1, 0.009)
     with pytest.raises(AssertionError, match="fewest"):
         exercises.check_worlds_for_pac_bayes(0.2, 20, 0.25, n + 1, 0.009)
+
+
+def test_cli_certify_prints_the_stored_certificate_and_refuses_bad_sizes(capsys):
+    from husky_course.cli import main
+
+    assert main(["certify", "--profile", "quick", "--worlds", "0"]) == 2
+    assert "--worlds" in capsys.readouterr().err
+    assert main(["certify", "--profile", "quick", "--no-progress"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["certificate"]["bound"] == load_certificate(QUICK).certificate.bound
