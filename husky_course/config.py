@@ -315,7 +315,7 @@ BUILD_MINUTES: dict[str, dict[str, float]] = {
     "full": {
         "dataset": 0.2, "encoder_decoder": 6, "reward_net": 0.3, "safety_image": 2.5, "safety_prim": 2.5,
         "joint": 5, "diagnosis": 2.5, "rnn": 7, "survival labels": 0.5, "distilled": 5.5, "memory": 4,
-        "certificate": 4.5,
+        "certificate": 2,
     },
 }
 
