@@ -214,10 +214,11 @@ def _evaluate(args: argparse.Namespace) -> dict:
 def _certify(args: argparse.Namespace) -> dict:
     """Run the ``certify`` subcommand: the certificate at the asked scale (its own artifact)."""
     from .evaluation.certificate import get_certificate
+    from .evaluation.pac_bayes import MIN_WORLDS
 
     profile = get_profile(args.profile)
     g = profile.guarantee
-    worlds = g.worlds if args.worlds is None else check_int(args.worlds, "--worlds", 1, 10**6)
+    worlds = g.worlds if args.worlds is None else check_int(args.worlds, "--worlds", MIN_WORLDS, 10**6)
     heldout = g.heldout_worlds if args.heldout_worlds is None else args.heldout_worlds
     heldout = check_int(heldout, "--heldout-worlds", 1, 10**6)
     finetune = min(g.finetune_worlds, worlds)

@@ -17,10 +17,18 @@ import torch
 
 from husky_course.config import get_profile
 from husky_course.course import exercises
-from husky_course.evaluation.certificate import load_certificate, sampled_costs
+from husky_course.data.io import DatasetError
+from husky_course.evaluation.certificate import (
+    _blocks,
+    _heldout_prefix,
+    certificate_dir,
+    load_certificate,
+    sampled_costs,
+)
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.evaluation.pac_bayes import certificate, gaussian_kl, kl_inverse, pac_bayes_kl_bound
 from husky_course.evaluation.statistics import clopper_pearson
+from husky_course.imitation.dagger import round_worlds
 from husky_course.imitation.posterior import GaussianLayer, _optimise, certificate_worlds, prior
 from husky_course.models.memory import get_last_layer, set_last_layer
 from husky_course.planners.memory import MemoryPlanner
@@ -109,9 +117,48 @@ def test_the_stored_certificate_is_consistent_with_its_costs():
     assert cert.confidence == pytest.approx(1 - g.delta - g.delta_prime)
     k, n = int(result.heldout_costs.sum()), g.heldout_worlds
     assert result.test_bound == clopper_pearson(k, n, cert.confidence, "upper")[1]
-    stored = json.loads((Path(result.path) / "certificate.json").read_text())
+    stored = json.loads((Path(result.path) / f"certificate-set{g.heldout_set}-{n}.json").read_text())
     assert stored["certificate"]["bound"] == cert.bound and stored["heldout_cost"] == k / n
+    unfitted = result.train_costs[0, g.finetune_worlds :]
+    assert np.array_equal(result.unfitted_costs, unfitted)
+    want = clopper_pearson(int(unfitted.sum()), unfitted.size, cert.confidence, "upper")[1]
+    assert result.unfitted_bound == want
     assert len(set(certificate_worlds(QUICK)) & set(eval_world_seeds(n, g.heldout_set))) == 0
+
+
+@pytest.mark.parametrize("name", ["quick", "full"])
+def test_the_prior_never_saw_the_certificate_worlds(name):
+    """The prior is the DAgger student: its worlds and the certificate's must not overlap."""
+    profile = get_profile(name)
+    dagger = {int(s) for r in range(profile.memory.rounds) for s in round_worlds(profile, r)}
+    assert not dagger & set(certificate_worlds(profile).tolist())
+    seed = profile.memory.collection_seed
+    clash = replace(profile, guarantee=replace(profile.guarantee, collection_seed=seed))
+    with pytest.raises(ValueError, match="never saw"):
+        certificate_worlds(clash)
+
+
+def test_more_heldout_worlds_reuse_the_stored_blocks(tmp_path):
+    """The held-out worlds are not in the artifact's key: a longer run starts from the stored blocks."""
+    small = replace(QUICK, guarantee=replace(QUICK.guarantee, heldout_worlds=10))
+    assert certificate_dir(small) == certificate_dir(QUICK)
+    other_set = replace(QUICK, guarantee=replace(QUICK.guarantee, heldout_set=5))
+    assert certificate_dir(other_set) == certificate_dir(QUICK)
+    assert _heldout_prefix(Path("r"), other_set) != _heldout_prefix(Path("r"), QUICK)
+
+
+def test_a_block_of_other_worlds_is_refused(tmp_path):
+    seeds = np.arange(5, dtype=np.int64)
+    _blocks(tmp_path / "train", seeds, lambda w, _: (np.zeros((1, len(w)), np.uint8),) * 2)
+    with pytest.raises(DatasetError, match="other worlds"):
+        _blocks(tmp_path / "train", seeds + 1, None)
+
+
+def test_bad_confidence_and_too_few_worlds_are_refused():
+    with pytest.raises(ValueError, match="below 1"):
+        certificate(np.zeros((1, 10)), 0.0, delta=0.6, delta_prime=0.5)
+    with pytest.raises(ValueError, match="at least 8"):
+        pac_bayes_kl_bound(0.1, 0.0, 7, 0.01)
 
 
 def test_load_never_builds(tmp_path, monkeypatch):
@@ -127,7 +174,7 @@ def test_chapter_9_exercise_checks():
         exercises.check_kl_inverse(0.1, 0.02, 0.05)
     with pytest.raises(AssertionError):
         exercises.check_kl_inverse(0.1, 0.02, kl_inverse(0.1, 0.04))
-    n = next(n for n in range(1, 100_000) if pac_bayes_kl_bound(0.2, 20, n, 0.009) <= 0.25)
+    n = next(n for n in range(8, 100_000) if pac_bayes_kl_bound(0.2, 20, n, 0.009) <= 0.25)
     assert exercises.check_worlds_for_pac_bayes(0.2, 20, 0.25, n, 0.009)
     with pytest.raises(AssertionError, match="more worlds"):
         exercises.check_worlds_for_pac_bayes(0.2, 20, 0.25, n - 1, 0.009)

@@ -128,11 +128,13 @@ def check_kl_inverse(q: float, c: float, answer: float) -> bool:
 
 def check_worlds_for_pac_bayes(train_cost: float, kl: float, bound: float, n: int, delta: float) -> bool:
     """Chapter 9, exercise 2: fewest worlds ``n`` for which the PAC-Bayes-kl bound is at most ``bound``."""
-    from ..evaluation.pac_bayes import pac_bayes_kl_bound
+    from ..evaluation.pac_bayes import MIN_WORLDS, pac_bayes_kl_bound
 
     n = int(n)
-    if n < 1 or pac_bayes_kl_bound(train_cost, kl, n, delta) > bound:
+    if n < MIN_WORLDS:
+        raise AssertionError(f"the bound is proven for at least {MIN_WORLDS} worlds, got {n}")
+    if pac_bayes_kl_bound(train_cost, kl, n, delta) > bound:
         raise AssertionError(f"with {n} worlds the bound is above {bound}: more worlds are needed")
-    if n > 1 and pac_bayes_kl_bound(train_cost, kl, n - 1, delta) <= bound:
+    if n > MIN_WORLDS and pac_bayes_kl_bound(train_cost, kl, n - 1, delta) <= bound:
         raise AssertionError(f"{n - 1} worlds already give a bound of at most {bound}: find the fewest")
     return _ok(f"{n} worlds: bound {pac_bayes_kl_bound(train_cost, kl, n, delta):.4f} <= {bound}")

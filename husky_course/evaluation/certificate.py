@@ -1,19 +1,22 @@
 """Chapter 9's certificate as an artifact: the posterior, its sampled costs, the bound, the held-out check.
 
 Built once by :func:`get_certificate` (``python -m husky_course train certificate``), in resumable
-pieces under ``artifacts/<profile>/models/certificate-<hash>/``:
+pieces under ``artifacts/<profile>/models/certificate-<hash>/`` (the hash covers everything but the
+held-out worlds, so measuring on more held-out worlds reuses the rest):
 
 1. ``posterior.npz`` -- the Gaussian over the student's output layer
    (:func:`husky_course.imitation.posterior.fit_posterior`);
-2. ``train_<k>.npz`` -- blocks of the costs of weight vectors drawn from it on the ``N``
-   certificate training worlds (``draws_per_world`` fresh draws per world);
-3. ``heldout_<k>.npz`` -- the same on ``heldout_worlds`` evaluation worlds of evaluation set
-   ``heldout_set`` (one draw per world): the cost the certificate is about, measured;
-4. ``certificate.json`` -- the numbers.
+2. ``train_<k>.npz`` -- blocks of :data:`BLOCK` worlds: the costs of weight vectors drawn from it
+   on the ``N`` certificate training worlds (``draws_per_world`` fresh draws per world);
+3. ``heldout-set<s>/block_<k>.npz`` -- one draw per world on the evaluation worlds of evaluation
+   set ``s``: the cost the certificate is about, measured (a longer run reuses the first blocks);
+4. ``certificate-set<s>-<n>.json`` -- the numbers, with ``n`` held-out worlds.
 
-A cost is 1 when the robot does not cross (a collision), else 0. Draw ``d`` in world ``w`` uses
-weights :meth:`~husky_course.imitation.posterior.GaussianLayer.draw` ``(seed, w, d)``, so every
-cost is a pure function of the world and the draw, on any engine and for any number of workers.
+Every block stores its world seeds and is checked against them when read. A cost is 1 when the
+robot does not cross (in an episode, a collision), else 0. Draw ``d`` in world ``w`` uses weights
+:meth:`~husky_course.imitation.posterior.GaussianLayer.draw` ``(seed, w, d)``, so every cost is a
+pure function of the world and the draw, on either engine and for any number of workers (on one
+kind of hardware with the same library versions: float rounding may differ across CPUs).
 :func:`load_certificate` never builds.
 """
 
@@ -40,12 +43,12 @@ from ..sim.fast import FastSimulator
 from ..training.memory import final_fingerprint, load_memory
 from ..training.trainer import CheckpointError
 from .episodes import eval_world_seeds, run_episode
-from .pac_bayes import Certificate, certificate
+from .pac_bayes import MIN_WORLDS, Certificate, certificate
 from .statistics import clopper_pearson
 
 BLOCK = 1_000  #: worlds per stored block (the unit of resumable work)
 TASK = 25  #: worlds per engine task
-FORMAT = 1
+FORMAT = 2
 
 
 @dataclass
@@ -69,6 +72,12 @@ class CertificateResult:
     test_bound : float
         The Clopper-Pearson upper bound on the cost from the held-out worlds, at the certificate's
         own confidence (the test-set bound the course had before).
+    unfitted_costs : ndarray, shape (N - finetune_worlds,)
+        First-draw costs on the training worlds the posterior was *not* fitted on (all but the first
+        ``finetune_worlds``): independent of the posterior, so held-out worlds in all but name.
+    unfitted_bound : float
+        Their Clopper-Pearson bound at the certificate's confidence: a test-set bound that spends
+        no extra worlds.
     path : str
         The artifact's directory.
     """
@@ -82,6 +91,8 @@ class CertificateResult:
     heldout_cost: float
     heldout_ci95: tuple[float, float]
     test_bound: float
+    unfitted_costs: np.ndarray
+    unfitted_bound: float
     path: str
 
     def to_json(self) -> dict:
@@ -97,17 +108,18 @@ class CertificateResult:
             "heldout_ci95": list(self.heldout_ci95),
             "heldout_mean_prims": float(self.heldout_prims.mean()),
             "test_bound": self.test_bound,
+            "unfitted_worlds": int(self.unfitted_costs.size),
+            "unfitted_cost": float(self.unfitted_costs.mean()) if self.unfitted_costs.size else None,
+            "unfitted_bound": self.unfitted_bound,
         }
 
 
 def certificate_fingerprint(profile: Profile) -> dict:
-    """What determines the certificate: the student, the guarantee config, the simulator, the format."""
-    return {
-        "format": FORMAT,
-        "student": final_fingerprint(profile),
-        "guarantee": to_dict(profile.guarantee),
-        "sim": to_dict(profile.sim),
-    }
+    """What determines the certificate: the student, the guarantee config (but its held-out worlds),
+    the simulator, the format."""
+    guarantee = {k: v for k, v in to_dict(profile.guarantee).items() if not k.startswith("heldout_")}
+    return {"format": FORMAT, "block": BLOCK, "student": final_fingerprint(profile),
+            "guarantee": guarantee, "sim": to_dict(profile.sim)}
 
 
 def certificate_dir(profile: Profile) -> Path:
@@ -177,18 +189,34 @@ def _read(path: Path) -> dict[str, np.ndarray]:
         raise DatasetError(f"{path} is truncated or corrupted ({exc}); delete it and rerun") from exc
 
 
-def _blocks(run: Path, name: str, seeds: np.ndarray, build: object) -> tuple[np.ndarray, np.ndarray]:
-    """Costs over ``seeds`` in stored blocks of :data:`BLOCK` worlds, building the missing ones."""
+def _blocks(prefix: Path, seeds: np.ndarray, build: object) -> tuple[np.ndarray, np.ndarray]:
+    """Costs over ``seeds`` in stored blocks ``<prefix>_<k>.npz`` of :data:`BLOCK` worlds.
+
+    A missing block is built by ``build(world_seeds, description)``; a stored one must hold exactly
+    the world seeds it is read for.
+    """
     costs, prims = [], []
     for k, i in enumerate(range(0, len(seeds), BLOCK)):
-        path = run / f"{name}_{k:03d}.npz"
+        path = prefix.parent / f"{prefix.name}_{k:03d}.npz"
+        want = seeds[i : i + BLOCK]
         if not path.is_file():
-            c, p = build(seeds[i : i + BLOCK], f"{name} worlds {i}-{min(i + BLOCK, len(seeds))}")  # type: ignore[operator]
-            _save(path, {"costs": c, "prims": p})
+            c, p = build(want, f"{prefix.name} worlds {i}-{i + len(want)}")  # type: ignore[operator]
+            _save(path, {"costs": c, "prims": p, "world_seeds": want})
         block = _read(path)
+        if not np.array_equal(block.get("world_seeds", np.zeros(0)), want):
+            raise DatasetError(f"{path} holds other worlds than expected; delete it and rerun")
         costs.append(block["costs"])
         prims.append(block["prims"])
     return np.concatenate(costs, 1), np.concatenate(prims, 1)
+
+
+def _heldout_prefix(run: Path, profile: Profile) -> Path:
+    return run / f"heldout-set{profile.guarantee.heldout_set}" / "block"
+
+
+def _json_path(run: Path, profile: Profile) -> Path:
+    g = profile.guarantee
+    return run / f"certificate-set{g.heldout_set}-{g.heldout_worlds}.json"
 
 
 def _result(
@@ -198,6 +226,8 @@ def _result(
     cert = certificate(train[0], layer.kl(), g.delta, g.delta_prime, draws="per_world")
     h_costs, h_prims = heldout[0][0], heldout[1][0]
     k, n = int(h_costs.sum()), int(h_costs.size)
+    unfitted = train[0][0, g.finetune_worlds :]
+    k_u, n_u = int(unfitted.sum()), int(unfitted.size)
     return CertificateResult(
         certificate=cert,
         posterior=layer,
@@ -208,6 +238,8 @@ def _result(
         heldout_cost=k / n,
         heldout_ci95=clopper_pearson(k, n, 0.95),
         test_bound=clopper_pearson(k, n, cert.confidence, "upper")[1],
+        unfitted_costs=unfitted,
+        unfitted_bound=clopper_pearson(k_u, n_u, cert.confidence, "upper")[1] if n_u else 1.0,
         path=str(run),
     )
 
@@ -218,9 +250,10 @@ def get_certificate(
     """The certificate, built where missing (needs the trained memory student; see the module docstring)."""
     g = profile.guarantee
     run = certificate_dir(profile)
-    if not (run / "certificate.json").is_file():
+    if not _json_path(run, profile).is_file():
         announce_build("certificate", profile.name, "train certificate")
     model, _, _ = load_memory(profile)
+    certificate(np.zeros((1, MIN_WORLDS)), 0.0, g.delta, g.delta_prime)  # refuse bad deltas before any work
     run.mkdir(parents=True, exist_ok=True)
     post_path = run / "posterior.npz"
     if not post_path.is_file():
@@ -232,11 +265,13 @@ def get_certificate(
             model, layer, chunk, draws, profile.sim, profile.memory, g.seed, engine, workers, progress, desc
         )
 
-    train = _blocks(run, "train", certificate_worlds(profile), costs_of(g.draws_per_world))
-    heldout = _blocks(run, "heldout", eval_world_seeds(g.heldout_worlds, g.heldout_set), costs_of(1))
+    train = _blocks(run / "train", certificate_worlds(profile), costs_of(g.draws_per_world))
+    prefix = _heldout_prefix(run, profile)
+    prefix.parent.mkdir(exist_ok=True)
+    heldout = _blocks(prefix, eval_world_seeds(g.heldout_worlds, g.heldout_set), costs_of(1))
     result = _result(profile, run, layer, train, heldout)
-    if not (run / "certificate.json").is_file():
-        atomic_write_bytes(run / "certificate.json", json.dumps(result.to_json(), indent=1).encode())
+    if not _json_path(run, profile).is_file():
+        atomic_write_bytes(_json_path(run, profile), json.dumps(result.to_json(), indent=1).encode())
     return result
 
 
@@ -244,7 +279,7 @@ def load_certificate(profile: Profile) -> CertificateResult:
     """The built certificate; never builds (the error names the command that does)."""
     g = profile.guarantee
     run = certificate_dir(profile)
-    if not (run / "certificate.json").is_file():
+    if not _json_path(run, profile).is_file():
         raise CheckpointError(
             f"no certificate for profile {profile.name!r} in the artifact store (expected {run}); build it "
             f"with `python -m husky_course train certificate --profile {profile.name}`"
@@ -254,6 +289,7 @@ def load_certificate(profile: Profile) -> CertificateResult:
     def missing(*_: object) -> None:
         raise DatasetError(f"{run} is incomplete; delete it and build it again")
 
-    train = _blocks(run, "train", certificate_worlds(profile), missing)
-    heldout = _blocks(run, "heldout", eval_world_seeds(g.heldout_worlds, g.heldout_set), missing)
+    train = _blocks(run / "train", certificate_worlds(profile), missing)
+    heldout_seeds = eval_world_seeds(g.heldout_worlds, g.heldout_set)
+    heldout = _blocks(_heldout_prefix(run, profile), heldout_seeds, missing)
     return _result(profile, run, layer, train, heldout)

@@ -2,7 +2,8 @@
 
 A *stochastic* policy is a distribution ``P`` over network weights; at the start of an episode one
 weight vector is drawn from ``P`` and the robot drives with it. Its cost ``C(P)`` is the expected
-cost (here: 1 for a collision or a stop short of the finish, 0 for a crossing) over the unknown
+cost (here: 1 when the robot does not cross the course, which in the course's episodes means a
+collision, 0 when it crosses) over the unknown
 distribution of worlds. From ``N`` training worlds drawn from that distribution and a prior ``P0``
 chosen *before* seeing them, the PAC-Bayes-kl bound (Maurer's form, the one the lab uses) says
 that with probability at least ``1 - delta`` over the worlds, for every ``P`` at once,
@@ -33,6 +34,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..checks import is_int
+
+#: Maurer's bound, with its ``2 sqrt(N)`` constant, is proven for at least this many worlds
+MIN_WORLDS = 8
 
 
 def bernoulli_kl(q: float, p: float) -> float:
@@ -85,8 +89,13 @@ def gaussian_kl(
 
 
 def pac_bayes_kl_bound(train_cost: float, kl: float, n_worlds: int, delta: float) -> float:
-    """Upper bound on ``C(P)`` from its training cost ``C_S(P)``, ``KL(P || P0)`` and ``N`` worlds."""
+    """Upper bound on ``C(P)`` from its training cost ``C_S(P)``, ``KL(P || P0)`` and ``N`` worlds.
+
+    Maurer's constant ``2 sqrt(N)`` is proven for ``N >= 8``; fewer worlds are refused.
+    """
     _check(n_worlds, delta)
+    if n_worlds < MIN_WORLDS:
+        raise ValueError(f"the PAC-Bayes-kl bound needs at least {MIN_WORLDS} worlds, got {n_worlds}")
     if kl < 0:
         raise ValueError(f"KL(P || P0) must be >= 0, got {kl}")
     return kl_inverse(train_cost, (kl + math.log(2.0 * math.sqrt(n_worlds) / delta)) / n_worlds)
@@ -107,7 +116,7 @@ class Certificate:
     bound: float  #: the certificate: C(P) <= bound with probability >= confidence
     kl: float
     n_worlds: int
-    n_policies: int  #: weight vectors drawn per world
+    n_policies: int  #: "shared": weight vectors in all; "per_world": vectors drawn per world
     delta: float
     delta_prime: float
     draws: str = "shared"  #: "shared" (the lab's: each vector on every world) or "per_world"
@@ -131,6 +140,8 @@ def certificate(
     """
     if draws not in ("shared", "per_world"):
         raise ValueError(f"draws must be 'shared' or 'per_world', got {draws!r}")
+    if not delta + delta_prime < 1.0:
+        raise ValueError(f"delta + delta_prime must be below 1 (the confidence), got {delta} + {delta_prime}")
     costs = np.asarray(costs, np.float64)
     if costs.ndim != 2 or costs.size == 0:
         raise ValueError(f"costs must be a non-empty (policies, worlds) array, got shape {costs.shape}")

@@ -16,8 +16,9 @@ weights and biases ``w`` are drawn at the start of each episode from a diagonal 
 
       E_{w ~ P}[ BCE(survival predicted with w, label) ] + KL(P || P0) / N,
 
-  a smooth stand-in for the bound itself (the training cost one can differentiate, plus the bound's
-  price for moving away from the prior). The bound holds for whatever posterior this returns.
+  a heuristic surrogate of the bound (a training loss one can differentiate in place of the 0/1
+  cost, plus the bound's price for moving away from the prior). The bound holds for whatever
+  posterior this returns.
 
 Everything is a pure function of the profile and the seeds (one torch thread, seeded generators).
 """
@@ -40,7 +41,7 @@ from ..progress import tqdm
 from ..training.inference import single_thread
 from .dagger import rollouts
 
-BATCH = 2048  #: states per forward pass when computing features (bounds memory, not results)
+BATCH = 2048  #: states per forward pass when computing features (bounds memory)
 
 
 @dataclass
@@ -94,8 +95,23 @@ class GaussianLayer:
 
 
 def certificate_worlds(profile: Profile) -> np.ndarray:
-    """World seeds ``(N,)`` of the certificate's training worlds (``GuaranteeConfig.collection_seed``)."""
+    """World seeds ``(N,)`` of the certificate's training worlds (``GuaranteeConfig.collection_seed``).
+
+    Raises ``ValueError`` when that collection seed is one the prior's training (DAgger), the dataset
+    or the calibration draws worlds from: the prior must not have seen the certificate's worlds.
+    """
     g = profile.guarantee
+    taken = {
+        "MemoryConfig.collection_seed (the prior's DAgger worlds)": profile.memory.collection_seed,
+        "DataConfig.seed (the dataset)": profile.data.seed,
+        "CalibrationConfig.seed": profile.calibration.seed,
+    }
+    for what, seed in taken.items():
+        if g.collection_seed == seed:
+            raise ValueError(
+                f"GuaranteeConfig.collection_seed {seed} is also {what}: the certificate's training worlds "
+                "must be worlds the prior never saw; choose a collection seed nothing else uses"
+            )
     return np.array([world_seed_for(g.collection_seed, v) for v in range(g.worlds)], np.int64)
 
 
@@ -118,7 +134,7 @@ def _features(model: MemoryNet, image: np.ndarray, grid: np.ndarray) -> torch.Te
 def fit_posterior(model: MemoryNet, profile: Profile, progress: bool = True) -> GaussianLayer:
     """Fit the posterior on the first ``finetune_worlds`` certificate worlds (see the module docstring).
 
-    ``model`` is the trained student; it is left unchanged.
+    ``model`` is the trained student; its weights are left unchanged (it is put in evaluation mode).
     """
     g, mem = profile.guarantee, profile.memory
     if not 1 <= g.finetune_worlds <= g.worlds:
