@@ -23,7 +23,6 @@ kind of hardware with the same library versions: float rounding may differ acros
 from __future__ import annotations
 
 import copy
-import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +31,7 @@ import numpy as np
 import torch
 
 from ..config import MemoryConfig, Profile, SimConfig, to_dict
-from ..data.io import DatasetError, atomic_write_bytes
+from ..data.io import DatasetError, atomic_save_npz, atomic_write_bytes, load_npz
 from ..data.store import model_dir
 from ..engines import map_tasks
 from ..imitation.posterior import GaussianLayer, certificate_worlds, fit_posterior
@@ -175,20 +174,6 @@ def sampled_costs(
     return np.concatenate([p[0] for p in parts], 1), np.concatenate([p[1] for p in parts], 1)
 
 
-def _save(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    atomic_write_bytes(path, buf.getvalue())
-
-
-def _read(path: Path) -> dict[str, np.ndarray]:
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except Exception as exc:  # a truncated or foreign file
-        raise DatasetError(f"{path} is truncated or corrupted ({exc}); delete it and rerun") from exc
-
-
 def _blocks(prefix: Path, seeds: np.ndarray, build: object) -> tuple[np.ndarray, np.ndarray]:
     """Costs over ``seeds`` in stored blocks ``<prefix>_<k>.npz`` of :data:`BLOCK` worlds.
 
@@ -201,8 +186,8 @@ def _blocks(prefix: Path, seeds: np.ndarray, build: object) -> tuple[np.ndarray,
         want = seeds[i : i + BLOCK]
         if not path.is_file():
             c, p = build(want, f"{prefix.name} worlds {i}-{i + len(want)}")  # type: ignore[operator]
-            _save(path, {"costs": c, "prims": p, "world_seeds": want})
-        block = _read(path)
+            atomic_save_npz(path, {"costs": c, "prims": p, "world_seeds": want})
+        block = load_npz(path)
         if not np.array_equal(block.get("world_seeds", np.zeros(0)), want):
             raise DatasetError(f"{path} holds other worlds than expected; delete it and rerun")
         costs.append(block["costs"])
@@ -257,8 +242,8 @@ def get_certificate(
     run.mkdir(parents=True, exist_ok=True)
     post_path = run / "posterior.npz"
     if not post_path.is_file():
-        _save(post_path, fit_posterior(model, profile, progress).arrays())
-    layer = GaussianLayer.from_arrays(_read(post_path))
+        atomic_save_npz(post_path, fit_posterior(model, profile, progress).arrays())
+    layer = GaussianLayer.from_arrays(load_npz(post_path))
 
     def costs_of(draws: int) -> object:
         return lambda chunk, desc: sampled_costs(
@@ -284,7 +269,7 @@ def load_certificate(profile: Profile) -> CertificateResult:
             f"no certificate for profile {profile.name!r} in the artifact store (expected {run}); build it "
             f"with `python -m husky_course train certificate --profile {profile.name}`"
         )
-    layer = GaussianLayer.from_arrays(_read(run / "posterior.npz"))
+    layer = GaussianLayer.from_arrays(load_npz(run / "posterior.npz"))
 
     def missing(*_: object) -> None:
         raise DatasetError(f"{run} is incomplete; delete it and build it again")

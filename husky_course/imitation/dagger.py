@@ -20,16 +20,14 @@ first missing piece and ends with the same bytes. ``model.pt`` there is the last
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 
 from ..config import Profile
 from ..data.collect import world_seed_for
-from ..data.io import DatasetError, atomic_write_bytes
+from ..data.io import atomic_save_npz, load_npz
 from ..data.labels import survival_at
 from ..data.store import runs_dir
 from ..models.memory import MemoryNet
@@ -108,20 +106,6 @@ def rollouts(
     return arrays, successes / max(len(seeds), 1)
 
 
-def _save_round(path: Path, data: dict[str, np.ndarray]) -> None:
-    buf = io.BytesIO()
-    np.savez(buf, **data)
-    atomic_write_bytes(path, buf.getvalue())
-
-
-def _load_round(path: Path) -> dict[str, np.ndarray]:
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except Exception as exc:  # a truncated or foreign file
-        raise DatasetError(f"{path} is truncated or corrupted ({exc}); delete it and rerun") from exc
-
-
 def _tensors(data: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, torch.Tensor]:
     t = torch.from_numpy(rows)
     return {
@@ -152,8 +136,8 @@ def get_memory(profile: Profile, progress: bool = True) -> Student:
                 data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress
             )
             data["success"] = np.array([success])
-            _save_round(path, data)
-        data = _load_round(path)
+            atomic_save_npz(path, data)
+        data = load_npz(path)
         rounds.append(
             {"round": r, "acting": "teacher" if r == 0 else "student", "states": len(data["pose"]),
              "success_in_its_worlds": float(data["success"][0])}
