@@ -8,6 +8,7 @@ the book leaves out, so no page holds an empty widget box.
 from __future__ import annotations
 
 import os
+import sys
 from typing import Any
 
 
@@ -16,13 +17,22 @@ def static_mode() -> bool:
     return bool(os.environ.get("HUSKY_STATIC_WIDGETS") or os.environ.get("CI"))
 
 
+def _in_kernel() -> bool:
+    """Whether this code runs in a Jupyter kernel (an IPython shell with a kernel attached)."""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    return getattr(shell, "kernel", None) is not None
+
+
 def announce_build(what: str, profile_name: str, command: str) -> None:
     """One line before an artifact is built: what, roughly how long, and how to build it ahead.
 
     ``command`` is the CLI subcommand that builds it (``"train joint"``, ``"collect"``).
 
     A notebook that finds an artifact missing says so before its progress bar starts, so that a
-    student knows why a cell takes minutes (and a teacher how to avoid it before class).
+    student knows why a cell takes minutes (and a teacher how to avoid it before class). In a
+    notebook the line goes to stdout (stderr would be drawn as an error); elsewhere to stderr, so
+    that a command's stdout stays what it prints (the CLI's JSON).
     """
     from .config import BUILD_MINUTES  # the floor: config has no imports from here
 
@@ -34,6 +44,7 @@ def announce_build(what: str, profile_name: str, command: str) -> None:
     print(
         f"Building {what} ({profile_name} profile): not in the artifact store yet, {how_long}; "
         f"later runs load it. Ahead of time: `python -m husky_course {command} --profile {profile_name}`.",
+        file=sys.stdout if _in_kernel() else sys.stderr,
         flush=True,
     )
 

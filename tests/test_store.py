@@ -85,9 +85,11 @@ def test_a_build_is_announced_in_one_line_first(tmp_path, monkeypatch, capsys):
     profile = get_profile("quick")
     profile = replace(profile, data=replace(profile.data, videos=8))
     store.get_dataset(profile, workers=1, progress=False)
-    out = capsys.readouterr().out.strip().splitlines()
+    printed = capsys.readouterr()
+    assert printed.out == "", "outside a notebook stdout is left to the command (the CLI's JSON)"
+    out = printed.err.strip().splitlines()
     assert len(out) == 1 and out[0].startswith("Building dataset (quick profile)")
     assert "under a minute on 2 CPU cores" in out[0]
     assert "`python -m husky_course collect --profile quick`" in out[0]
     store.get_dataset(profile, workers=1, progress=False)  # now it loads: nothing announced
-    assert capsys.readouterr().out == ""
+    assert capsys.readouterr() == ("", "")
