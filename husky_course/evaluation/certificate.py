@@ -33,7 +33,7 @@ import torch
 from ..config import MemoryConfig, Profile, SimConfig, to_dict
 from ..data.io import DatasetError, atomic_save_npz, atomic_write_bytes, load_npz
 from ..data.store import model_dir
-from ..engines import map_tasks
+from ..engines import ENGINE, map_tasks
 from ..imitation.posterior import GaussianLayer, certificate_worlds, fit_posterior
 from ..models.memory import MemoryNet, set_last_layer
 from ..planners.memory import MemoryPlanner
@@ -42,11 +42,10 @@ from ..sim.fast import FastSimulator
 from ..training.memory import final_fingerprint, load_memory
 from ..training.trainer import CheckpointError
 from .episodes import eval_world_seeds, run_episode
-from .pac_bayes import MIN_WORLDS, Certificate, certificate
+from .pac_bayes import Certificate, certificate, check_confidence
 from .statistics import clopper_pearson
 
 BLOCK = 1_000  #: worlds per stored block (the unit of resumable work)
-TASK = 25  #: worlds per engine task
 FORMAT = 2
 
 
@@ -159,7 +158,8 @@ def sampled_costs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Costs and primitives ``(draws, len(world_seeds))`` uint8 of weights drawn from ``layer``."""
     world_seeds = np.asarray(world_seeds, np.int64)
-    chunks = [world_seeds[i : i + TASK] for i in range(0, len(world_seeds), TASK)]
+    size = ENGINE.worlds_per_task
+    chunks = [world_seeds[i : i + size] for i in range(0, len(world_seeds), size)]
     parts = map_tasks(
         _cost_task,
         [(c, int(draws)) for c in chunks],
@@ -238,7 +238,7 @@ def get_certificate(
     if not _json_path(run, profile).is_file():
         announce_build("certificate", profile.name, "train certificate")
     model, _, _ = load_memory(profile)
-    certificate(np.zeros((1, MIN_WORLDS)), 0.0, g.delta, g.delta_prime)  # refuse bad deltas before any work
+    check_confidence(g.delta, g.delta_prime)  # before any work
     run.mkdir(parents=True, exist_ok=True)
     post_path = run / "posterior.npz"
     if not post_path.is_file():

@@ -140,8 +140,7 @@ def certificate(
     """
     if draws not in ("shared", "per_world"):
         raise ValueError(f"draws must be 'shared' or 'per_world', got {draws!r}")
-    if not delta + delta_prime < 1.0:
-        raise ValueError(f"delta + delta_prime must be below 1 (the confidence), got {delta} + {delta_prime}")
+    check_confidence(delta, delta_prime)
     costs = np.asarray(costs, np.float64)
     if costs.ndim != 2 or costs.size == 0:
         raise ValueError(f"costs must be a non-empty (policies, worlds) array, got shape {costs.shape}")
@@ -162,6 +161,15 @@ def certificate(
         delta_prime=delta_prime,
         draws=draws,
     )
+
+
+def check_confidence(delta: float, delta_prime: float) -> None:
+    """Refuse ``delta``, ``delta_prime`` outside (0, 1) or summing to 1 or more (no confidence left)."""
+    for d in (delta, delta_prime):
+        if not 0.0 < d < 1.0:
+            raise ValueError(f"a confidence parameter must lie in (0, 1), got {d}")
+    if not delta + delta_prime < 1.0:
+        raise ValueError(f"delta + delta_prime must be below 1 (the confidence), got {delta} + {delta_prime}")
 
 
 def _check(n: int, delta: float) -> None:

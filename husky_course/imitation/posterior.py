@@ -35,13 +35,11 @@ import torch.nn.functional as F
 from ..config import Profile
 from ..data.collect import world_seed_for
 from ..data.labels import survival_at
-from ..models.memory import MemoryNet, features, get_last_layer, last_layer
+from ..models.memory import MemoryNet, get_last_layer, last_layer
 from ..planners.memory import MemoryPlanner
 from ..progress import tqdm
-from ..training.inference import single_thread
+from ..training.inference import BATCH, single_thread
 from .dagger import rollouts
-
-BATCH = 2048  #: states per forward pass when computing features (bounds memory)
 
 
 @dataclass
@@ -71,11 +69,11 @@ class GaussianLayer:
         return np.exp(self.log_std)
 
     def kl(self) -> float:
-        """``KL(P || P0)`` in nats (closed form for diagonal Gaussians, in float64)."""
-        mq, lq = self.mean.astype(np.float64), self.log_std.astype(np.float64)
-        mp, lp = self.prior_mean.astype(np.float64), math.log(self.prior_std)
-        terms = lp - lq + (np.exp(2 * lq) + (mq - mp) ** 2) / (2 * self.prior_std**2) - 0.5
-        return max(float(np.sum(terms)), 0.0)  # >= 0 in exact arithmetic; float32 storage rounds
+        """``KL(P || P0)`` in nats (:func:`kl_to_prior` in float64)."""
+        arrays = (self.mean, self.log_std, self.prior_mean)
+        mu, log_s, mu0 = (torch.from_numpy(np.asarray(a, np.float64)) for a in arrays)
+        kl = float(kl_to_prior(mu, log_s, mu0, self.prior_std))
+        return max(kl, 0.0)  # >= 0 in exact arithmetic; float32 storage rounds
 
     def draw(self, seed: int, world_seed: int, draw: int) -> np.ndarray:
         """Weights of draw ``draw`` in world ``world_seed`` (float32, a pure function of the three)."""
@@ -92,6 +90,12 @@ class GaussianLayer:
     @classmethod
     def from_arrays(cls, a: dict[str, np.ndarray]) -> GaussianLayer:
         return cls(a["mean"], a["log_std"], a["prior_mean"], float(a["prior_std"]), a["losses"])
+
+
+def kl_to_prior(mu: torch.Tensor, log_s: torch.Tensor, mu0: torch.Tensor, s0: float) -> torch.Tensor:
+    """``KL(N(mu, diag exp(log_s)^2) || N(mu0, s0^2 I))``: the closed form for diagonal Gaussians."""
+    var_ratio = (torch.exp(2 * log_s) + (mu - mu0) ** 2) / (2 * s0**2)
+    return torch.sum(math.log(s0) - log_s + var_ratio - 0.5)
 
 
 def certificate_worlds(profile: Profile) -> np.ndarray:
@@ -127,7 +131,8 @@ def _features(model: MemoryNet, image: np.ndarray, grid: np.ndarray) -> torch.Te
     for i in range(0, len(image), BATCH):
         x = torch.from_numpy(image[i : i + BATCH].astype(np.float32))
         g = torch.from_numpy(grid[i : i + BATCH])
-        out.append(features(model, x, g))
+        with torch.no_grad():
+            out.append(model.hidden(x, g))
     return torch.cat(out)
 
 
@@ -174,8 +179,7 @@ def _optimise(
             w = mu + torch.exp(log_s) * eps  # (B, d): one weight vector per state
             weight = w[:, :n_w].view(-1, n_out, n_hidden)
             logits = torch.einsum("bh,boh->bo", h[rows], weight) + w[:, n_w:]
-            var_ratio = (torch.exp(2 * log_s) + (mu - mu0) ** 2) / (2 * s0**2)
-            kl = torch.sum(math.log(s0) - log_s + var_ratio - 0.5)
+            kl = kl_to_prior(mu, log_s, mu0, s0)
             loss = F.binary_cross_entropy_with_logits(logits, target[rows]) + kl / g.worlds
             opt.zero_grad()
             loss.backward()

@@ -46,11 +46,15 @@ class MemoryNet(nn.Module):
         side = (side + 1) // 2
         self.head = mlp([dims.latent + c2 * side * side, hidden, hidden, dims.n_primitives])
 
-    def logits(self, image: Tensor, grid: Tensor) -> Tensor:
-        """Pre-sigmoid survival fractions ``(B, n_primitives)``."""
+    def hidden(self, image: Tensor, grid: Tensor) -> Tensor:
+        """What the output layer sees: the head's last hidden activations ``(B, hidden)``."""
         if grid.dim() == 3:
             grid = grid.unsqueeze(1)
-        return self.head(torch.cat([self.encoder(image), self.map_net(grid.float())], dim=1))
+        return self.head[:-1](torch.cat([self.encoder(image), self.map_net(grid.float())], dim=1))
+
+    def logits(self, image: Tensor, grid: Tensor) -> Tensor:
+        """Pre-sigmoid survival fractions ``(B, n_primitives)``."""
+        return self.head[-1](self.hidden(image, grid))
 
     def survival(self, image: Tensor, grid: Tensor) -> Tensor:
         """Predicted steps survived ``(B, n_primitives)`` in ``[0, horizon]``."""
@@ -86,11 +90,3 @@ def set_last_layer(model: MemoryNet, w: Tensor) -> None:
     layer.weight.copy_(w[:n_w].view_as(layer.weight))
     layer.bias.copy_(w[n_w:])
 
-
-@torch.no_grad()
-def features(model: MemoryNet, image: Tensor, grid: Tensor) -> Tensor:
-    """What the output layer sees: the hidden activations ``(B, hidden)`` before it."""
-    if grid.dim() == 3:
-        grid = grid.unsqueeze(1)
-    x = torch.cat([model.encoder(image), model.map_net(grid.float())], dim=1)
-    return model.head[:-1](x)
