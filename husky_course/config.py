@@ -59,6 +59,20 @@ class WorldConfig:
         return self.obstacle_height_factor * self.robot_height
 
 
+WORLD_KINDS = ("static", "moving")
+
+
+@dataclass(frozen=True)
+class MovingWorldConfig(WorldConfig):
+    """The moving-obstacle course (chapter 10): the static course of the same seed, some cylinders walking
+    across it (along ``y``) at constant speeds and bouncing off the side walls; time counts primitive
+    steps. The model and why: :func:`husky_course.sim.world.make_world`.
+    """
+
+    moving_fraction: float = 0.4
+    speed_range: tuple[float, float] = (0.2, 0.6)  #: m per step; the robot advances 1 m per step
+
+
 @dataclass(frozen=True)
 class CameraConfig:
     """The onboard depth camera, mounted rigidly on the chassis (not on a joint).
@@ -72,9 +86,7 @@ class CameraConfig:
     fov_deg: float = 130.0  #: the lab's value; chapter 1 shows why 90 is too narrow
     near: float = 0.02
     far: float = 5.0
-    mount_forward: float = (
-        0.45  #: ahead of the base centre, on the collision cylinder, just behind the bumper (m)
-    )
+    mount_forward: float = 0.45  #: ahead of the base centre, on the collision cylinder, behind the bumper (m)
     mount_height: float = 0.40  #: above the ground (m)
 
 
@@ -283,19 +295,14 @@ def _profiles() -> dict[str, Profile]:
     sim = SimConfig()
     return {
         "quick": Profile(
-            "quick",
-            sim,
-            DataConfig(videos=1_000),
+            "quick", sim, DataConfig(videos=1_000),
             TrainingPlan(
-                encoder_decoder=TrainConfig(epochs=20, patience=3),
+                encoder_decoder=TrainConfig(epochs=20, patience=3), joint=TrainConfig(epochs=10, patience=3),
                 reward_net=TrainConfig(batch_size=16, epochs=30, patience=5),
-                joint=TrainConfig(epochs=10, patience=3),
-                probe=TrainConfig(epochs=15, patience=3),
-                rnn=TrainConfig(epochs=10, patience=3),
+                probe=TrainConfig(epochs=15, patience=3), rnn=TrainConfig(epochs=10, patience=3),
                 distilled=TrainConfig(epochs=10, patience=3),
             ),
-            EvalPlan(worlds=60),
-            calibration=CalibrationConfig(videos=500),
+            EvalPlan(worlds=60), calibration=CalibrationConfig(videos=500),
             memory=MemoryConfig(worlds_per_round=300, train=TrainConfig(epochs=10, patience=3)),
             guarantee=GuaranteeConfig(worlds=400, finetune_worlds=150, heldout_worlds=1_000),
         ),
@@ -318,6 +325,28 @@ BUILD_MINUTES: dict[str, dict[str, float]] = {
         "certificate": 2,
     },
 }
+
+
+def check_world_kind(kind: str) -> str:
+    """Return ``kind`` if it is one of :data:`WORLD_KINDS`, else raise :class:`ConfigError`."""
+    if kind not in WORLD_KINDS:
+        raise ConfigError(f"unknown world {kind!r}: choose one of {', '.join(WORLD_KINDS)}")
+    return kind
+
+
+def world_kind(sim: SimConfig) -> str:
+    """``"moving"`` if ``sim``'s world has moving obstacles, else ``"static"``."""
+    return "moving" if isinstance(sim.world, MovingWorldConfig) else "static"
+
+
+def with_world(profile: Profile, kind: str) -> Profile:
+    """``profile`` on the static or the moving course (same everything else; artifacts keyed by it)."""
+    w = profile.sim.world
+    if world_kind(profile.sim) == check_world_kind(kind):
+        return profile
+    base = {f: getattr(w, f) for f in WorldConfig.__dataclass_fields__}
+    world = MovingWorldConfig(**base) if kind == "moving" else WorldConfig(**base)
+    return replace(profile, sim=replace(profile.sim, world=world))
 
 
 def check_profile_name(name: str) -> str:
@@ -370,29 +399,9 @@ def config_hash(cfg: object) -> str:
 
 
 __all__ = [
-    "EVAL_SEED_BASE",
-    "PROFILES",
-    "CalibrationConfig",
-    "CameraConfig",
-    "ConfigError",
-    "DataConfig",
-    "EvalPlan",
-    "MemoryConfig",
-    "GuaranteeConfig",
-    "ModelConfig",
-    "OracleConfig",
-    "ModelDims",
-    "PrimitiveConfig",
-    "Profile",
-    "SimConfig",
-    "TrainConfig",
-    "TrainingPlan",
-    "WorldConfig",
-    "check_profile",
-    "check_profile_name",
-    "config_hash",
-    "get_profile",
-    "model_dims",
-    "replace",
-    "to_dict",
+    "EVAL_SEED_BASE", "PROFILES", "WORLD_KINDS", "CalibrationConfig", "CameraConfig", "ConfigError",
+    "DataConfig", "EvalPlan", "GuaranteeConfig", "MemoryConfig", "ModelConfig", "ModelDims",
+    "MovingWorldConfig", "OracleConfig", "PrimitiveConfig", "Profile", "SimConfig", "TrainConfig",
+    "TrainingPlan", "WorldConfig", "check_profile", "check_profile_name", "check_world_kind", "config_hash",
+    "get_profile", "model_dims", "replace", "to_dict", "with_world", "world_kind",
 ]

@@ -120,3 +120,62 @@ def test_outline_is_what_pybullet_draws_for_a_cylinder():
         if seg[i, j] >= 0:
             kept.append(k)
     assert tuple(kept) == OUTLINE_VERTICES
+
+
+# --- the moving course: both backends place the cylinders where they are at each query's time ---
+
+
+@pytest.fixture(scope="module")
+def moving_sims():
+    from husky_course.config import get_profile, with_world
+
+    config = with_world(get_profile("quick"), "moving").sim
+    fast, ref, still = FastSimulator(config), PyBulletSimulator(config), FastSimulator()
+    yield fast, ref, still
+    ref.close()
+
+
+def test_moving_depth_agrees_with_pybullet_at_random_times(moving_sims):
+    """Views at times the test draws (any real time in 0..10): every pixel within MAX_PIXEL_ERROR,
+    and the moving course's images really differ from the static course's at the same pose."""
+    fast, ref, still = moving_sims
+    rng = np.random.default_rng(7)
+    worst, moved = [], 0
+    for world, poses in _views(still, n_worlds=30, per_world=4, seed=3):
+        moving = fast.load(world.seed)
+        ref.load(moving)
+        times = rng.uniform(0, 10, len(poses))
+        free = ~fast.contacts(poses[:, None], times)[:, 0]  # a camera inside a cylinder sees nothing
+        poses, times = poses[free], times[free]
+        a, b = fast.depth(poses, times), ref.depth(poses, times)
+        worst += list(np.abs(a - b).reshape(len(poses), -1).max(1))
+        moved += int((np.abs(a - still.depth(poses)).reshape(len(poses), -1).max(1) > 0.05).sum())
+    print(f"moving views {len(worst)}: worst pixel {max(worst):.2e}; {moved} differ from the static course")
+    assert len(worst) >= 90 and max(worst) <= MAX_PIXEL_ERROR
+    assert moved >= len(worst) // 5
+
+
+def test_moving_contacts_agree_with_pybullet_at_random_times(moving_sims):
+    """Playbacks from random poses and start times: the same outcome and end pose in both backends,
+    and outcomes that differ from the static course's (so time is really being used)."""
+    fast, ref, still = moving_sims
+    rng = np.random.default_rng(11)
+    n, hits, changed = 0, 0, 0
+    for w in range(40):
+        world = fast.load(30_000 + w)
+        ref.load(world)
+        still.load(30_000 + w)
+        for _ in range(20):
+            pose = np.array([rng.uniform(1, 9), rng.uniform(-4, 4), rng.uniform(-0.3, 0.3)])
+            t = float(rng.integers(0, 10)) if rng.random() < 0.5 else float(rng.uniform(0, 10))
+            if fast.contact_along(pose[None], t) >= 0:
+                continue
+            k = int(rng.integers(25))
+            a, b = fast.apply(pose, k, t), ref.apply(pose, k, t)
+            assert a.collided == b.collided, (world.seed, pose, k, t)
+            np.testing.assert_allclose(a.pose, b.pose)
+            n += 1
+            hits += a.collided
+            changed += a.collided != still.apply(pose, k).collided
+    print(f"moving playbacks {n}: {hits} collide, {changed} differ from the static course")
+    assert n >= 500 and 0.1 < hits / n < 0.9 and changed >= n // 20

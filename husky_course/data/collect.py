@@ -53,11 +53,11 @@ def play_video(
     pose = world.start.copy()
     poses, applied = [], []
     collided = False
-    for _ in range(max_primitives):
+    for step in range(max_primitives):
         action = int(rng.integers(sim.library.n))
         poses.append(pose)
         applied.append(action)
-        result = sim.apply(pose, action)
+        result = sim.apply(pose, action, step)
         if result.collided:
             collided = True
             break
@@ -69,8 +69,9 @@ def play_video(
         labels[-1] = 1
         prims = prims.copy()
         prims[-1] = -1
+    images = sim.depth(np.asarray(poses), np.arange(n)) if render else np.empty((0,))  # step k at time k
     return {
-        "images": sim.depth(np.asarray(poses)).astype(np.float16) if render else np.empty((0,), np.float16),
+        "images": images.astype(np.float16),
         "prims": prims,
         "labels": labels,
         "applied": np.asarray(applied, np.int16),
@@ -103,10 +104,10 @@ def fresh_pairs(n: int, seed: int, config: SimConfig | None = None) -> dict[str,
         if safe.size == 0:
             continue
         t = int(rng.choice(safe))
-        pose = v["poses"][t].astype(float)
-        end = sim.apply(pose, int(v["applied"][t])).pose
-        out["image"].append(sim.depth(pose[None])[0])
-        out["next"].append(sim.depth(end[None])[0])
+        pose = v["poses"][t].astype(float)  # step t of the video: at time t
+        end = sim.apply(pose, int(v["applied"][t]), t).pose
+        out["image"].append(sim.depth(pose[None], t)[0])
+        out["next"].append(sim.depth(end[None], t + 1)[0])
         out["prim"].append(int(v["applied"][t]))
         out["world_seed"].append(int(v["world_seeds"][0]))
     return {k: np.asarray(val) for k, val in out.items()}

@@ -9,7 +9,8 @@ because every image carries its world seed and pose:
   :mod:`husky_course.sim.lattice`, used to distil it into a network);
 * :func:`nearest_obstacle_distance` -- the distance (m) to the nearest obstacle in view.
 
-All three group images by world so each world is loaded once.
+All three group images by world so each world is loaded once, and ask at each image's time (its
+step in the video: on the moving course the cylinders are where they were when it was taken).
 """
 
 from __future__ import annotations
@@ -44,8 +45,9 @@ def primitive_outcomes(
     for seed, rows in tqdm(groups, desc="outcomes", disable=not progress, leave=False):
         sim.load(seed)
         poses = np.asarray(ds.poses[idx[rows]], float)
+        times = np.repeat(np.asarray(ds.step[idx[rows]], float), len(ks))
         paths = sim.library.paths_from(np.repeat(poses, len(ks), 0), np.tile(ks, len(poses)))
-        out[rows] = sim.contacts(paths).any(1).reshape(len(poses), len(ks))
+        out[rows] = sim.contacts(paths, times).any(1).reshape(len(poses), len(ks))
     return out
 
 
@@ -69,18 +71,19 @@ def survival_steps(
     for seed, rows in tqdm(groups, desc="survival", disable=not progress, leave=False):
         sim.load(seed)
         for r in rows:
-            out[r] = best_continuations(sim, np.asarray(ds.poses[idx[r]], float), horizon)
+            pose, t = np.asarray(ds.poses[idx[r]], float), int(ds.step[idx[r]])
+            out[r] = best_continuations(sim, pose, horizon, t)
     return out
 
 
 def _survival_job(job: tuple) -> tuple[np.ndarray, np.ndarray]:
-    rows, seeds, poses, horizon, config = job
+    rows, seeds, poses, times, horizon, config = job
     sim = FastSimulator(config)
     out = np.zeros((len(rows), sim.library.n), np.int8)
-    for j, (seed, pose) in enumerate(zip(seeds, poses, strict=True)):
+    for j, (seed, pose, t) in enumerate(zip(seeds, poses, times, strict=True)):
         if sim.world is None or sim.world.seed != seed:
             sim.load(int(seed))
-        out[j] = best_continuations(sim, pose, horizon)
+        out[j] = best_continuations(sim, pose, horizon, float(t))
     return rows, out
 
 
@@ -92,8 +95,11 @@ def survival_at(
     workers: int = 2,
     progress: bool = True,
     engine: str | None = None,
+    times: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose)`` states, in parallel.
+    """Survival labels ``(n, 25)`` for arbitrary ``(world seed, pose, time)`` states, in parallel.
+
+    ``times`` (steps, default 0) matter on the moving course only.
 
     Chunks of states (sorted by world, so each task loads a world once) run as tasks on
     ``engine`` (default :func:`husky_course.engines.resolve_engine`: ``--engine``, else
@@ -103,9 +109,12 @@ def survival_at(
         raise ValueError(f"horizon must be >= 1, got {horizon}")
     world_seeds = np.asarray(world_seeds)
     poses = np.asarray(poses, float)
+    times = np.zeros(len(poses)) if times is None else np.asarray(times, float)
+    if times.shape != (len(poses),):
+        raise ValueError(f"need one time per state: {times.shape} times for {len(poses)} poses")
     order = np.argsort(world_seeds, kind="stable")
     chunks = np.array_split(order, max(1, len(order) // 400))
-    jobs = [(c, world_seeds[c], poses[c], horizon, config) for c in chunks if len(c)]
+    jobs = [(c, world_seeds[c], poses[c], times[c], horizon, config) for c in chunks if len(c)]
     out = np.zeros((len(poses), (config or SimConfig()).primitives.n), np.int8)
     parts = map_tasks(
         _survival_job,
@@ -132,17 +141,19 @@ def survival_steps_parallel(
     """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks)."""
     idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
     seeds = ds.world_seeds[ds.episode[idx]]
-    return survival_at(seeds, np.asarray(ds.poses[idx], float), horizon, config, workers, progress)
+    poses, times = np.asarray(ds.poses[idx], float), np.asarray(ds.step[idx], float)
+    return survival_at(seeds, poses, horizon, config, workers, progress, times=times)
 
 
-def best_continuations(sim: FastSimulator, pose: np.ndarray, horizon: int) -> np.ndarray:
-    """For each first primitive, the most steps (<= ``horizon``) a sequence starting with it survives.
+def best_continuations(sim: FastSimulator, pose: np.ndarray, horizon: int, t: float = 0.0) -> np.ndarray:
+    """For each first primitive, the most steps (<= ``horizon``) a sequence starting with it at time
+    ``t`` survives.
 
     One lattice expansion from ``pose`` (:func:`husky_course.sim.lattice.expand`, clearance not
     needed: ``cap = 0``) read backwards by :func:`husky_course.sim.lattice.survival`.
     """
     world = sim._require_world()
-    return survival(expand(world, sim.library, np.asarray(pose, float), horizon, cap=0.0))
+    return survival(expand(world, sim.library, np.asarray(pose, float), horizon, cap=0.0, t0=t))
 
 
 def nearest_obstacle_distance(
@@ -155,6 +166,7 @@ def nearest_obstacle_distance(
     out = np.full(len(idx), far)
     for seed, rows in groups:
         sim.load(seed)
-        t, kind = sim.column_hits(np.asarray(ds.poses[idx[rows]], float))
+        poses, times = np.asarray(ds.poses[idx[rows]], float), np.asarray(ds.step[idx[rows]], float)
+        t, kind = sim.column_hits(poses, times)
         out[rows] = np.minimum(np.where(kind >= 2, t, np.inf).min(1), far)
     return out

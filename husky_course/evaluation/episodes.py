@@ -85,6 +85,9 @@ def run_episode(
 ) -> Episode:
     """Run ``planner`` in world ``world_seed`` until a collision or ``max_primitives`` primitives.
 
+    Step ``k`` is time ``k``: the ``k``-th image is rendered at time ``k`` and the ``k``-th
+    primitive is played back from time ``k`` (what makes moving cylinders move).
+
     With ``record`` the episode also keeps every observation and the planner's ``last_scores``
     (for step-by-step figures and widgets).
     """
@@ -101,7 +104,7 @@ def run_episode(
     collided = False
     observations: list[np.ndarray] = []
     scores: list[np.ndarray | None] = []
-    for _ in range(max_primitives):
+    for step in range(max_primitives):
         t0 = time.perf_counter()
         action = planner.act(obs, pose.copy() if privileged else None)
         times.append(time.perf_counter() - t0)
@@ -109,13 +112,13 @@ def run_episode(
             observations.append(obs)
             scores.append(None if planner.last_scores is None else np.array(planner.last_scores))
         action = sim.library.check_index(action)
-        result = sim.apply(pose, action)
+        result = sim.apply(pose, action, step)
         actions.append(action)
         paths.append(result.path)
         pose = result.pose
         poses.append(pose)
         collided = result.collided
-        obs = None if collided else sim.depth(pose[None])[0]
+        obs = None if collided else sim.depth(pose[None], step + 1)[0]
         planner.observe(action, obs)
         if collided:
             break

@@ -60,13 +60,24 @@ def round_worlds(profile: Profile, r: int) -> np.ndarray:
     return np.array([world_seed_for(mem.collection_seed, v) for v in videos])
 
 
+def episode_steps(world_seed: np.ndarray) -> np.ndarray:
+    """Each rollout state's step in its episode (= its time): rollouts store one world's states
+    consecutively, one per step from 0, so it is the state's position in its run of equal seeds."""
+    world_seed = np.asarray(world_seed)
+    if not len(world_seed):
+        return np.zeros(0)
+    starts = np.flatnonzero(np.r_[True, world_seed[1:] != world_seed[:-1]])
+    run = np.repeat(starts, np.diff(np.r_[starts, len(world_seed)]))
+    return (np.arange(len(world_seed)) - run).astype(float)
+
+
 def rollouts(
     student: MemoryPlanner, seeds: np.ndarray, teacher: bool, profile: Profile, progress: bool = False
 ) -> tuple[dict[str, np.ndarray], float]:
     """Roll out in each world of ``seeds``; return every visited state and the success rate.
 
     With ``teacher`` the oracle's actions are applied (the student only builds its map along the
-    way); otherwise the student's own.
+    way); otherwise the student's own. Step ``k`` is time ``k`` (:func:`episode_steps`).
     """
     sim = FastSimulator(profile.sim)
     limit = profile.sim.max_primitives
@@ -82,20 +93,20 @@ def rollouts(
             oracle.reset(episode_start(oracle, sim, int(seed), pose, limit))
         obs = sim.depth(pose[None])[0]
         collided = False
-        for _ in range(limit):
+        for step in range(limit):
             image, grid = student.prepare(obs)
             out["image"].append(image.astype(np.float16))
             out["map"].append(grid.astype(np.uint8))
             out["world_seed"].append(int(seed))
             out["pose"].append(pose.copy())
             action = oracle.act(obs, pose.copy()) if teacher else student.choose(image, grid)
-            result = sim.apply(pose, action)
+            result = sim.apply(pose, action, step)
             student.observe(action, None)
             pose = result.pose
             if result.collided:
                 collided = True
                 break
-            obs = sim.depth(pose[None])[0]
+            obs = sim.depth(pose[None], step + 1)[0]
         successes += not collided
     arrays = {
         "image": np.asarray(out["image"], np.float16),
@@ -133,7 +144,8 @@ def get_memory(profile: Profile, progress: bool = True) -> Student:
             student = MemoryPlanner(model, profile.sim, mem)
             data, success = rollouts(student, round_worlds(profile, r), r == 0, profile, progress)
             data["survival"] = survival_at(
-                data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress
+                data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress,
+                times=episode_steps(data["world_seed"]),
             )
             data["success"] = np.array([success])
             atomic_save_npz(path, data)

@@ -39,7 +39,7 @@ from ..models.memory import MemoryNet, get_last_layer, last_layer
 from ..planners.memory import MemoryPlanner
 from ..progress import tqdm
 from ..training.inference import BATCH, single_thread
-from .dagger import rollouts
+from .dagger import episode_steps, rollouts
 
 
 @dataclass
@@ -149,7 +149,10 @@ def fit_posterior(model: MemoryNet, profile: Profile, progress: bool = True) -> 
     student = MemoryPlanner(model, profile.sim, mem)
     with single_thread():
         data, _ = rollouts(student, seeds, False, profile, progress)
-    labels = survival_at(data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress)
+    labels = survival_at(
+        data["world_seed"], data["pose"], mem.label_horizon, profile.sim, progress=progress,
+        times=episode_steps(data["world_seed"]),
+    )
     with single_thread():
         h = _features(model.eval(), data["image"], data["map"])
         target = torch.from_numpy(labels.astype(np.float32) / mem.label_horizon)

@@ -123,7 +123,7 @@ class MappingPlanner(Planner):
     def _check(self, grid: ClearanceGrid):
         every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
 
-        def check(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # no time
             x, y = X[:, ::every], Y[..., ::every]
             clear = grid(np.broadcast_to(x, y.shape), y).min(-1) - self.radius
             return clear < self.margin, clear - self.margin

@@ -28,6 +28,9 @@ class OraclePlanner(Planner):
     The chosen plan is then replayed with ``sim.apply``; an edge that the replay finds in contact
     (float drift of the lattice poses, in practice never) is forbidden and the plan recomputed, so
     the oracle never collides on a world it reports crossable.
+
+    On the moving course it plans in space-time: the episode's step ``k`` is time ``k`` (it counts
+    its own decisions), and every edge is checked against the cylinders where they are then.
     """
 
     name = "oracle"
@@ -43,6 +46,7 @@ class OraclePlanner(Planner):
         self.plan_poses: list[np.ndarray] = []
         self._sim: Simulator | None = None
         self._step = 0
+        self._time = 0  #: the episode's step: the time the next primitive starts at
         self._action_scores: list[np.ndarray] = []
 
     def reset(self, start: EpisodeStart) -> None:
@@ -50,18 +54,18 @@ class OraclePlanner(Planner):
         sim, pose = start.sim, start.pose
         if sim is None or pose is None:
             raise RuntimeError("the oracle is privileged: run it with run_episode, which gives it sim, pose")
-        self._sim, self._step = sim, 0
+        self._sim, self._step, self._time = sim, 0, 0
         horizon = self.horizon if self.horizon is not None else sim.config.max_primitives
         safe_steps = self._solve(np.asarray(pose, float), horizon)
         self.crossable = safe_steps == horizon
 
     def _solve(self, pose: np.ndarray, horizon: int) -> int:
-        """Plan from ``pose``; return the safe steps of the chosen plan."""
+        """Plan from ``pose`` at the current time; return the safe steps of the chosen plan."""
         sim = self._sim
         if sim is None or sim.world is None:
             raise RuntimeError("OraclePlanner.reset needs a simulator with a loaded world")
         try:
-            lattice = expand(sim.world, sim.library, pose, horizon, self.cap)
+            lattice = expand(sim.world, sim.library, pose, horizon, self.cap, self._time)
         except LatticeError as exc:
             raise PlannerError(
                 f"the oracle needs yaw 0 and evenly spaced primitives ending at heading 0 ({exc})"
@@ -91,7 +95,7 @@ class OraclePlanner(Planner):
             self.plan.append(m)
             if not feasible[k][row, m]:
                 return None  # the planned collision of a world that cannot be crossed
-            result = self._sim.apply(self.plan_poses[-1], m)
+            result = self._sim.apply(self.plan_poses[-1], m, self._time + k)
             if result.collided:
                 return k, row, m
             self.plan_poses.append(result.pose)
@@ -113,4 +117,5 @@ class OraclePlanner(Planner):
         self.last_scores = self._action_scores[self._step]
         action = self.plan[self._step]
         self._step += 1
+        self._time += 1
         return action

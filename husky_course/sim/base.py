@@ -4,6 +4,10 @@ A simulator holds one :class:`~husky_course.sim.world.World` at a time and answe
 what does the onboard camera see from a pose (:meth:`Simulator.depth`), and does playing a
 primitive back from a pose touch an obstacle (:meth:`Simulator.apply`). The primitive library,
 the playback and the collision rule live here, so the backends differ only in geometry queries.
+
+Every query takes the time ``t`` in primitive steps (default 0; see :mod:`husky_course.sim.world`):
+an image at time ``t`` sees the cylinders where they are at ``t``, and a primitive started at ``t``
+is checked sample by sample against the cylinders at ``t + s / (S - 1)``. Static worlds ignore it.
 """
 
 from __future__ import annotations
@@ -65,27 +69,29 @@ class Simulator:
     def _load(self, world: World) -> None:
         raise NotImplementedError
 
-    def depth(self, poses: np.ndarray) -> np.ndarray:
-        """Normalised depth images ``(B, size, size)`` float32 in [0, 1] for robot poses ``(B, 3)``."""
+    def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+        """Normalised depth images ``(B, size, size)`` float32 in [0, 1] for robot poses ``(B, 3)``
+        at times ``t`` (a number, or one per pose)."""
         raise NotImplementedError
 
-    def rgb(self, pose: np.ndarray) -> np.ndarray:
-        """An RGB view ``(size, size, 3)`` uint8 from the onboard camera, for display."""
+    def rgb(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """An RGB view ``(size, size, 3)`` uint8 from the onboard camera at time ``t``, for display."""
         raise NotImplementedError
 
-    def contact_along(self, path: np.ndarray) -> int:
-        """Index of the first pose of ``path (S, 3)`` whose collision cylinder touches, or -1."""
+    def contact_along(self, path: np.ndarray, t: float = 0.0) -> int:
+        """Index of the first pose of ``path (S, 3)`` whose collision cylinder touches, or -1; the
+        path is a primitive started at time ``t`` (its samples at ``t + s / (S - 1)``)."""
         raise NotImplementedError
 
     def close(self) -> None:
         """Release backend resources (safe to call twice)."""
 
     # --- shared logic --------------------------------------------------------------------------
-    def apply(self, pose: np.ndarray, index: int) -> StepResult:
-        """Play primitive ``index`` back from ``pose`` and check it against the loaded world."""
+    def apply(self, pose: np.ndarray, index: int, t: float = 0.0) -> StepResult:
+        """Play primitive ``index`` back from ``pose``, starting at time ``t``, against the loaded world."""
         self._require_world()
         path = self.library.path_from(pose, index)
-        hit = self.contact_along(path)
+        hit = self.contact_along(path, t)
         if hit < 0:
             return StepResult(False, path[-1].copy(), path)
         return StepResult(True, path[max(hit - 1, 0)].copy(), path)

@@ -11,6 +11,10 @@ and it is batched over many poses.
 
 Collision: the robot's cylinder (radius ``R``) touches obstacle ``(x, y, r)`` at a recorded pose iff
 the centres are closer than ``R + r``, and touches a wall iff ``|y| + R`` exceeds the wall's face.
+
+On the moving course every query places the cylinders where they are at its time
+(:meth:`husky_course.sim.world.World.obstacles_at`): per image for depth, per recorded sample for
+contact.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import numpy as np
 from ..config import SimConfig
 from .base import Simulator
 from .camera import camera_positions, normalize_depth, pixel_tangents
-from .world import World, obstacle_outline
+from .world import World, obstacle_outline, pose_times, sample_times
 
 _CHUNK = 512  # poses per vectorised block (bounds memory: chunk x columns x obstacles)
 
@@ -48,10 +52,17 @@ class FastSimulator(Simulator):
 
     def _load(self, world: World) -> None:
         self._obs = np.asarray(world.obstacles, float)
+        self._moves = len(world.moving) > 0
+
+    def _obs_at(self, t: np.ndarray) -> np.ndarray:
+        """Obstacles ``(B, n, 3)`` at times ``t (B,)``, or ``(1, n, 3)`` when nothing moves."""
+        if not self._moves:
+            return self._obs[None]
+        return self._require_world().obstacles_at(t)
 
     # --- camera ----------------------------------------------------------------------------------
-    def column_hits(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Nearest vertical surface per column.
+    def column_hits(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Nearest vertical surface per column, seen from ``poses (B, 3)`` at times ``t``.
 
         Returns
         -------
@@ -67,7 +78,7 @@ class FastSimulator(Simulator):
         c, s = np.cos(yaw), np.sin(yaw)
         u = self._u[None]
         hx, hy = c - u * s, s + u * c  # (B, W) horizontal ray directions (forward component 1)
-        t_obs = self._cylinder_hits(cam, hx, hy)
+        t_obs = self._cylinder_hits(cam, hx, hy, self._obs_at(pose_times(t, len(poses))))
         # walls: inner faces at y = +-wall_y, limited to the walls' x extent
         t_wall = np.full(hx.shape, np.inf)
         x0, x1 = world.config.wall_x_range
@@ -86,26 +97,26 @@ class FastSimulator(Simulator):
         kind = np.where(t_min < t_wall, 2 + k_obs, np.where(np.isfinite(t_wall), 1, 0))
         return np.minimum(t_min, t_wall), kind
 
-    def visible_obstacles(self, pose: np.ndarray) -> np.ndarray:
+    def visible_obstacles(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:
         """Indices of the obstacles the camera renders from ``pose``: the one definition of "in view".
 
         An obstacle is in view when it is the nearest surface of at least one image column within
         ``far``: this accounts for the camera's position and field of view, the obstacle's width
         (a thin one can fall between columns), occlusion by nearer obstacles and the far limit.
         """
-        t, kind = self.column_hits(np.asarray(pose, float)[None])
-        seen = kind[0][(kind[0] >= 2) & (t[0] <= self.config.camera.far)]
+        depth, kind = self.column_hits(np.asarray(pose, float)[None], t)
+        seen = kind[0][(kind[0] >= 2) & (depth[0] <= self.config.camera.far)]
         return np.unique(seen - 2)
 
-    def _cylinder_hits(self, cam: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
-        """Ray parameter ``(B, W, n_obs)`` of the first hit on each obstacle's render polygon."""
-        obs = self._obs
-        ox = cam[:, 0:1, None] - obs[None, None, :, 0]  # camera relative to obstacle centre
-        oy = cam[:, 1:2, None] - obs[None, None, :, 1]
+    def _cylinder_hits(self, cam: np.ndarray, hx: np.ndarray, hy: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        """Ray parameter ``(B, W, n_obs)`` of the first hit on each obstacle's render polygon
+        (obstacles ``obs``: ``(B, n, 3)``, or ``(1, n, 3)`` shared by every pose)."""
+        ox = cam[:, 0:1, None] - obs[:, None, :, 0]  # camera relative to obstacle centre
+        oy = cam[:, 1:2, None] - obs[:, None, :, 1]
         # broad phase: the circumscribed circle |cam + t h - o| = r must be crossed
         a = (hx * hx + hy * hy)[..., None]
         b = hx[..., None] * ox + hy[..., None] * oy
-        disc = b * b - a * (ox * ox + oy * oy - obs[None, None, :, 2] ** 2)
+        disc = b * b - a * (ox * ox + oy * oy - obs[:, None, :, 2] ** 2)
         out = np.full(disc.shape, np.inf)
         bi, wi, oi = np.nonzero(disc >= 0)
         if bi.size == 0:
@@ -113,7 +124,8 @@ class FastSimulator(Simulator):
         # narrow phase (Cyrus-Beck): clip the ray against the polygon's half-planes
         px, py = ox[bi, 0, oi], oy[bi, 0, oi]
         dx, dy = hx[bi, wi], hy[bi, wi]
-        num = obs[oi, 2, None] * _OFFSETS - (px[:, None] * _NORMALS[:, 0] + py[:, None] * _NORMALS[:, 1])
+        radius = self._obs[oi, 2, None]
+        num = radius * _OFFSETS - (px[:, None] * _NORMALS[:, 0] + py[:, None] * _NORMALS[:, 1])
         den = dx[:, None] * _NORMALS[:, 0] + dy[:, None] * _NORMALS[:, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = num / den
@@ -124,17 +136,18 @@ class FastSimulator(Simulator):
         out[bi[hit], wi[hit], oi[hit]] = t_in[hit]
         return out
 
-    def depth_metres(self, poses: np.ndarray) -> np.ndarray:
-        """Depth along the view axis in metres ``(B, size, size)``, clipped to [near, far]."""
+    def depth_metres(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+        """Depth along the view axis in metres ``(B, size, size)`` at times ``t``, clipped to [near, far]."""
         cfg = self.config.camera
         height = self._require_world().config.obstacle_height
         poses = np.asarray(poses, float).reshape(-1, 3)
+        times = pose_times(t, len(poses))
         out = np.empty((len(poses), cfg.size, cfg.size))
         v = self._v[None, :, None]  # rows
         with np.errstate(divide="ignore"):
             t_ground = np.where(self._v < 0, -cfg.mount_height / self._v, np.inf)[None, :, None]
         for i in range(0, len(poses), _CHUNK):
-            t_col, _ = self.column_hits(poses[i : i + _CHUNK])
+            t_col, _ = self.column_hits(poses[i : i + _CHUNK], times[i : i + _CHUNK])
             t_col = t_col[:, None, :]
             with np.errstate(invalid="ignore"):
                 below_top = cfg.mount_height + t_col * v <= height
@@ -142,15 +155,15 @@ class FastSimulator(Simulator):
             out[i : i + _CHUNK] = np.clip(t, cfg.near, cfg.far)
         return out
 
-    def depth(self, poses: np.ndarray) -> np.ndarray:
-        return normalize_depth(self.depth_metres(poses), self.config.camera)
+    def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+        return normalize_depth(self.depth_metres(poses, t), self.config.camera)
 
-    def rgb(self, pose: np.ndarray) -> np.ndarray:
+    def rgb(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:
         """A shaded RGB view: ground grey, walls blue-grey, obstacles orange, sky white."""
         cfg = self.config.camera
         pose = np.asarray(pose, float).reshape(1, 3)
-        z = self.depth_metres(pose)[0]
-        _, kind = self.column_hits(pose)
+        z = self.depth_metres(pose, t)[0]
+        _, kind = self.column_hits(pose, t)
         with np.errstate(divide="ignore"):
             t_ground = np.where(self._v < 0, -cfg.mount_height / self._v, np.inf)[:, None]
         is_ground = np.isclose(z, np.minimum(t_ground, cfg.far)) & np.isfinite(t_ground)
@@ -162,16 +175,18 @@ class FastSimulator(Simulator):
         return img.astype(np.uint8)
 
     # --- collision -------------------------------------------------------------------------------
-    def contact_along(self, path: np.ndarray) -> int:
-        hits = self.contacts(np.asarray(path, float)[None])[0]
+    def contact_along(self, path: np.ndarray, t: float = 0.0) -> int:
+        hits = self.contacts(np.asarray(path, float)[None], t)[0]
         idx = np.flatnonzero(hits)
         return int(idx[0]) if idx.size else -1
 
-    def contacts(self, paths: np.ndarray) -> np.ndarray:
-        """Per-pose contact flags ``(B, S)`` for a batch of paths ``(B, S, 3)``.
+    def contacts(self, paths: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+        """Per-pose contact flags ``(B, S)`` for a batch of primitive paths ``(B, S, 3)`` started at
+        times ``t`` (a number, or one per path).
 
-        A broad phase keeps only the (path, obstacle) pairs whose bounding circles overlap, so
-        the exact per-sample test runs on a few obstacles per path instead of all of them.
+        A broad phase keeps only the (path, obstacle) pairs whose bounding circles overlap (an
+        obstacle's grown by the distance it can walk in half a step, the path's ``t`` at its
+        middle), so the exact per-sample test runs on a few obstacles per path instead of all.
         """
         world = self._require_world()
         radius = world.config.robot_radius
@@ -181,10 +196,18 @@ class FastSimulator(Simulator):
         if self._obs.shape[0] and paths.shape[1]:
             lo, hi = xy.min(1), xy.max(1)  # (B, 2) bounding box of every path
             centre, half = (lo + hi) / 2.0, np.linalg.norm(hi - lo, axis=1) / 2.0
-            gap = np.linalg.norm(centre[:, None, :] - self._obs[None, :, :2], axis=-1)
-            pb, po = np.nonzero(gap < half[:, None] + radius + self._obs[None, :, 2])
+            times = pose_times(t, len(paths))
+            mid = self._obs_at(times + 0.5)  # (B or 1, n, 3)
+            walk = 0.5 * np.abs(world.speeds) if self._moves else 0.0  # type: ignore[arg-type]
+            gap = np.linalg.norm(centre[:, None, :] - mid[..., :2], axis=-1)
+            pb, po = np.nonzero(gap < half[:, None] + radius + self._obs[None, :, 2] + walk)
             if pb.size:
-                d2 = ((xy[pb] - self._obs[po, None, :2]) ** 2).sum(-1)  # (pairs, S)
+                if self._moves:  # each pair's obstacle at each sample's time
+                    y = world.obstacle_y(po, sample_times(times[pb], paths.shape[1]))  # (pairs, S)
+                    centres = np.stack([np.broadcast_to(self._obs[po, 0, None], y.shape), y], axis=-1)
+                else:
+                    centres = self._obs[po, None, :2]
+                d2 = ((xy[pb] - centres) ** 2).sum(-1)  # (pairs, S)
                 touch = d2 < (radius + self._obs[po, 2, None]) ** 2
                 np.logical_or.at(hit, pb, touch)
         return hit

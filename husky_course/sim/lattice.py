@@ -14,6 +14,11 @@ primitive's recorded samples) and measuring its clearance. Two backward passes r
   starts with it stays collision-free: the labels the distilled planner learns;
 * :func:`rank_plans` -- the oracle's lexicographic ranking of whole plans (safe steps, then the
   plan's smallest clearance binned to ``quantum``, then the least lateral motion).
+
+**Space-time.** The robot cannot wait: every primitive takes one step of time, so every state at
+depth ``k`` is reached at time ``t0 + k``, and the lattice in ``(k, J)`` is already a lattice in
+space-time. On the moving course each edge of level ``k`` is checked against the cylinders where
+they are at its samples' times ``t0 + k + s / (S - 1)``; nothing else changes.
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .primitives import PrimitiveLibrary
-from .world import World
+from .world import World, sample_times
 
 
 class LatticeError(ValueError):
@@ -76,24 +81,28 @@ def lattice_step(library: PrimitiveLibrary) -> tuple[float, float]:
     return float(ends[0, 0]), h
 
 
-#: ``check(X, Y) -> (hit, clear)``: for the sample positions of every edge of one lattice level,
-#: ``X (n, S)`` (the same for every state) and ``Y (states, n, S)``, whether each edge touches
-#: something and its clearance (m), both ``(states, n)``
-EdgeCheck = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: ``check(X, Y, T) -> (hit, clear)``: for the sample positions of every edge of one lattice level,
+#: ``X (n, S)`` (the same for every state) and ``Y (states, n, S)``, and the samples' times
+#: ``T (S,)``, whether each edge touches something and its clearance (m), both ``(states, n)``
+EdgeCheck = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-def disc_check(obstacles: np.ndarray, wall_y: float, robot_radius: float, cap: float) -> EdgeCheck:
+def disc_check(
+    obstacles: np.ndarray, wall_y: float, robot_radius: float, cap: float, world: World | None = None
+) -> EdgeCheck:
     """The simulator's own contact rule as an :data:`EdgeCheck`: the robot disc against obstacle
     discs ``(x, y, r)`` and two side walls at ``|y| = wall_y``.
 
     ``cap`` (m) bounds the clearance that is measured: obstacles further than ``cap`` beyond
     contact are skipped, so clearances above ``cap`` are lower bounds, which is all a ranking
-    that caps clearance needs.
+    that caps clearance needs. With ``world`` (whose ``obstacles`` these are) its moving cylinders
+    are placed where they are at each sample's time.
     """
     obs = np.asarray(obstacles, float).reshape(-1, 3)
     reach = robot_radius + obs[:, 2]
+    movers = set() if world is None else set(world.moving.tolist())
 
-    def check(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         absy = np.abs(Y)
         hit = (absy + robot_radius > wall_y).any(-1)
         c = wall_y - robot_radius - absy.max(-1)
@@ -104,6 +113,8 @@ def disc_check(obstacles: np.ndarray, wall_y: float, robot_radius: float, cap: f
             cols = np.flatnonzero((dx2 < (reach[i] + cap) ** 2).any(0))
             if not cols.size:  # inside the x window but no sample within reach + cap
                 continue
+            if i in movers:  # where it is at each of these samples' times
+                oy = world.obstacle_y(np.array([i]), T[None, cols])[0]  # type: ignore[union-attr]
             d2 = dx2[None][..., cols] + (Y[..., cols] - oy) ** 2
             hit |= (d2 < reach[i] ** 2).any(-1)
             c = np.minimum(c, np.sqrt(d2.min(-1)) - reach[i])
@@ -112,14 +123,19 @@ def disc_check(obstacles: np.ndarray, wall_y: float, robot_radius: float, cap: f
     return check
 
 
-def expand(world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, cap: float) -> Lattice:
-    """Expand the lattice from ``pose`` in ``world`` for ``horizon`` steps (the simulator's geometry)."""
-    check = disc_check(world.obstacles, world.wall_y, world.config.robot_radius, cap)
-    return expand_with(check, library, pose, horizon)
+def expand(
+    world: World, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, cap: float, t0: float = 0.0
+) -> Lattice:
+    """Expand the lattice from ``pose`` at time ``t0`` in ``world`` for ``horizon`` steps (the
+    simulator's geometry, in space-time on the moving course)."""
+    check = disc_check(world.obstacles, world.wall_y, world.config.robot_radius, cap, world)
+    return expand_with(check, library, pose, horizon, t0)
 
 
-def expand_with(check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int) -> Lattice:
-    """Expand the lattice from ``pose`` for ``horizon`` steps, each edge judged by ``check``.
+def expand_with(
+    check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, t0: float = 0.0
+) -> Lattice:
+    """Expand the lattice from ``pose`` at time ``t0`` for ``horizon`` steps, each edge judged by ``check``.
 
     The one search routine: the oracle and the survival labels judge edges with the simulator's
     geometry (:func:`disc_check`), the mapping planner with its map.
@@ -136,7 +152,7 @@ def expand_with(check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, h
         y0 = pose[1] + k * offsets[0] + J * h
         X = pose[0] + k * adv + local[:, :, 0]  # (n, S)
         Y = y0[:, None, None] + local[None, :, :, 1]  # (nJ, n, S)
-        hit, c = check(X, Y)
+        hit, c = check(X, Y, sample_times(t0 + k, local.shape[1]))
         feasible.append(~hit)
         clear.append(c)
         targets = J[:, None] + np.arange(n)[None]

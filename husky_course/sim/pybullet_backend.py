@@ -12,6 +12,11 @@ The Husky is moved kinematically with ``resetBasePositionAndOrientation``. Its c
 the course is a vertical cylinder of radius ``robot_radius`` (a collision-only body that follows
 the robot during checks and is parked far below the ground otherwise); contact means
 ``getClosestPoints`` reports a distance <= 0 to an obstacle or a wall.
+
+On the moving course the moving cylinders are bodies too, moved with
+``resetBasePositionAndOrientation`` to where :meth:`husky_course.sim.world.World.obstacles_at` puts
+them before every image (at its time) and every recorded sample of a contact check (at the sample's
+time): PyBullet renders and tests the scene as it is at that moment.
 """
 
 from __future__ import annotations
@@ -63,7 +68,7 @@ import pybullet_data  # noqa: E402
 from ..config import SimConfig  # noqa: E402
 from .base import Simulator  # noqa: E402
 from .camera import camera_positions, linearize_depth_buffer, normalize_depth  # noqa: E402
-from .world import World, obstacle_outline  # noqa: E402
+from .world import World, obstacle_outline, pose_times, sample_times  # noqa: E402
 
 _PARK = (0.0, 0.0, -100.0)
 
@@ -162,6 +167,7 @@ class PyBulletSimulator(Simulator):
                 )
             bodies.append(p.createMultiBody(0, col, vis, [x, y, height / 2], physicsClientId=cid))
         self._bodies = bodies
+        self._placed_at: float | None = 0.0  # time the moving cylinders stand at
         col = p.createCollisionShape(
             p.GEOM_CYLINDER, radius=wcfg.robot_radius, height=0.5, physicsClientId=cid
         )
@@ -174,9 +180,22 @@ class PyBulletSimulator(Simulator):
             self.husky, [float(pose[0]), float(pose[1]), 0.0], quat, physicsClientId=self._cid()
         )
 
-    def _render(self, pose: np.ndarray, renderer_flags: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    def _place_obstacles(self, t: float) -> None:
+        """Move the moving cylinders to where they are at time ``t`` (nothing on the static course)."""
+        world = self._require_world()
+        if not len(world.moving) or self._placed_at == t:
+            return
+        height = world.config.obstacle_height
+        for i, (x, y, _) in zip(world.moving, world.obstacles_at(t)[world.moving], strict=True):
+            p.resetBasePositionAndOrientation(
+                self._bodies[2 + i], [x, y, height / 2], [0, 0, 0, 1], physicsClientId=self._cid()
+            )
+        self._placed_at = t
+
+    def _render(self, pose: np.ndarray, flags: int = 0, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         cid = self._cid()
         self._require_world()
+        self._place_obstacles(float(t))
         pose = np.asarray(pose, float)
         self._place_husky(pose)
         eye = camera_positions(self.config.camera, pose[None])[0]
@@ -189,42 +208,48 @@ class PyBulletSimulator(Simulator):
             view,
             self._proj,
             renderer=p.ER_TINY_RENDERER,
-            flags=renderer_flags,
+            flags=flags,
             physicsClientId=cid,
         )
         rgb = np.asarray(rgb, np.uint8).reshape(size, size, 4)[..., :3]
         depth = np.asarray(depth, np.float64).reshape(size, size)
         return rgb, depth
 
-    def depth(self, poses: np.ndarray) -> np.ndarray:
+    def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
         poses = np.asarray(poses, float).reshape(-1, 3)
+        times = pose_times(t, len(poses))
         cam = self.config.camera
         out = np.empty((len(poses), cam.size, cam.size), np.float32)
         for b, pose in enumerate(poses):
-            _, buf = self._render(pose)
+            _, buf = self._render(pose, t=float(times[b]))
             out[b] = normalize_depth(linearize_depth_buffer(buf, cam), cam)
         return out
 
-    def rgb(self, pose: np.ndarray) -> np.ndarray:
-        return self._render(pose)[0].copy()
+    def rgb(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:
+        return self._render(pose, t=t)[0].copy()
 
-    def contact_along(self, path: np.ndarray) -> int:
+    def contact_along(self, path: np.ndarray, t: float = 0.0) -> int:
         cid = self._cid()
         world = self._require_world()
         path = np.asarray(path, float)
-        # Broad phase (conservative): only bodies whose footprint comes near the path's bounds.
+        times = sample_times(t, len(path))
+        # Broad phase (conservative): only bodies whose footprint comes near the path's bounds
+        # (a moving cylinder's grown by how far it can walk during the path).
         reach = world.config.robot_radius + 0.05
         lo, hi = path[:, :2].min(0) - reach, path[:, :2].max(0) + reach
-        obs = world.obstacles
+        obs = world.obstacles_at(float(times[0]))
+        walk = 0.0 if world.speeds is None else np.abs(world.speeds) * float(times[-1] - times[0])
+        size = obs[:, 2] + walk
         near = (
-            (obs[:, 0] + obs[:, 2] >= lo[0])
-            & (obs[:, 0] - obs[:, 2] <= hi[0])
-            & (obs[:, 1] + obs[:, 2] >= lo[1])
-            & (obs[:, 1] - obs[:, 2] <= hi[1])
+            (obs[:, 0] + size >= lo[0])
+            & (obs[:, 0] - size <= hi[0])
+            & (obs[:, 1] + size >= lo[1])
+            & (obs[:, 1] - size <= hi[1])
         )
         candidates = [self._bodies[0], self._bodies[1]] + [self._bodies[2 + i] for i in np.flatnonzero(near)]
         hit = -1
         for k, (x, y, _) in enumerate(path):
+            self._place_obstacles(float(times[k]))
             p.resetBasePositionAndOrientation(self.proxy, [x, y, 0.25], [0, 0, 0, 1], physicsClientId=cid)
             if any(
                 pt[8] <= 0.0
