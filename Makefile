@@ -27,6 +27,7 @@ install: $(VENV)/.installed
 data: install  ## build the dataset and train the models the chapters need, once, with progress bars
 	$(PY) -m husky_course collect --profile $(PROFILE) --workers 2 > /dev/null
 	$(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
+	$(PY) -m husky_course train memory --world moving --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
 	@# jupyter-book's execution cache knows notebooks, not HUSKY_PROFILE: drop it when the profile changes
@@ -50,6 +51,7 @@ sync: install  ## after editing a chapter source (or its notebook outside Jupyte
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
+	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
 	HUSKY_PROFILE=quick $(PY) -m pytest tests notebooks --nbval-lax -p no:cacheprovider
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)

@@ -7,6 +7,8 @@ Examples
 ``python -m husky_course stats artifacts/full/my-dataset --json``
 ``python -m husky_course train all --profile full``
 ``python -m husky_course evaluate --planner heuristic --worlds 500 --seed 0 --json``
+``python -m husky_course train memory --world moving`` (chapter 10's student, on moving obstacles)
+``python -m husky_course evaluate --planner memory --world moving --trained-on static``
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import sys
 from dataclasses import replace
 
 from .checks import check_int
-from .config import PROFILES, ConfigError, get_profile
+from .config import PROFILES, WORLD_KINDS, ConfigError, get_profile, with_world
 from .data.collect import collect
 from .data.dataset import load_dataset, stats
 from .data.io import DatasetError
@@ -50,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _engine_option(c)
+    _world_option(c)
     s = sub.add_parser("stats", help="summarise a dataset")
     s.add_argument("dir", help="dataset directory")
     s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -85,6 +88,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=1,
         help="worker processes (local), or the CPUs of a local Ray cluster (default 1)",
     )
+    _world_option(e)
+    e.add_argument(
+        "--trained-on",
+        choices=WORLD_KINDS,
+        default=None,
+        help="which course a learned planner was trained on (default: the --world it is evaluated on)",
+    )
     t = sub.add_parser("train", help="train (or load) the chapters' models into the artifact store")
     t.add_argument("model", choices=(*TRAINABLE, "all"), help="which model ('all': every one, in order)")
     t.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
@@ -97,6 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
         "there is one); checkpoints load on any device",
     )
     _engine_option(t)
+    _world_option(t)
     g = sub.add_parser(
         "certify",
         help="chapter 9's PAC-Bayes certificate for the memory student, at the profile's scale or another",
@@ -120,6 +131,16 @@ def _engine_option(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _world_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--world",
+        choices=WORLD_KINDS,
+        default="static",
+        help="the course: static cylinders (the paper's), or some of them moving (chapter 10); "
+        "artifacts are keyed by it (default static)",
+    )
+
+
 #: what ``train`` can build, in the order the chapters need them
 TRAINABLE = (
     "encoder_decoder",
@@ -140,7 +161,7 @@ def _train(args: argparse.Namespace) -> dict:
     from .course.diagnosis import get_diagnosis
     from .training.builders import BUILDERS
 
-    profile = get_profile(args.profile)
+    profile = with_world(get_profile(args.profile), args.world)
     progress = not args.no_progress
     if args.device is not None:
         set_device(args.device)
@@ -181,7 +202,8 @@ def _train(args: argparse.Namespace) -> dict:
 
 def _evaluate(args: argparse.Namespace) -> dict:
     """Run the ``evaluate`` subcommand and return the result's JSON dict."""
-    profile = get_profile(args.profile)
+    base = get_profile(args.profile)
+    profile = with_world(base, args.world)
     if args.planner not in PLANNERS:
         raise PlannerError(f"unknown planner {args.planner!r}: choose one of {', '.join(PLANNERS)}")
     learned = args.planner in LEARNED_PLANNERS
@@ -190,8 +212,10 @@ def _evaluate(args: argparse.Namespace) -> dict:
         if not learned:
             raise PlannerError(f"--look-ahead applies only to {', '.join(LEARNED_PLANNERS)}")
         kwargs["look_ahead"] = check_look_ahead(args.look_ahead)
+    if args.trained_on is not None and not learned:
+        raise PlannerError(f"--trained-on applies only to {', '.join(LEARNED_PLANNERS)}")
     if learned:
-        kwargs["profile"] = profile
+        kwargs["profile"] = with_world(base, args.trained_on or args.world)
     if args.planner == "heuristic":
         kwargs["config"] = profile.sim
     eval_world_seeds(args.worlds, args.seed)  # validate before building anything
@@ -208,7 +232,11 @@ def _evaluate(args: argparse.Namespace) -> dict:
         config=profile.sim,
         keep_paths=False,  # only the summary is printed
     )
-    return result.to_json()
+    out = result.to_json()
+    out["world"] = args.world
+    if learned:
+        out["trained_on"] = args.trained_on or args.world
+    return out
 
 
 def _certify(args: argparse.Namespace) -> dict:
@@ -235,7 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "engine", None) is not None:
             set_engine(args.engine)  # reaches the labels that `train` computes without threading it through
         if args.command == "collect":
-            profile = get_profile(args.profile)
+            profile = with_world(get_profile(args.profile), args.world)
             if args.out is None:  # the store's directory for exactly this spec (its name is the spec's hash)
                 data = replace(
                     profile.data,

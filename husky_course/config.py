@@ -1,9 +1,7 @@
 """Every number the course depends on, in one place.
 
 The configuration is a tree of frozen dataclasses. ``HUSKY_PROFILE`` (``quick`` or ``full``) is read
-here and nowhere else; every size a notebook uses comes from :func:`get_profile`.
-
-Geometry conventions (used by every module):
+here and nowhere else; every size a notebook uses comes from :func:`get_profile`. Geometry conventions:
 
 * world frame: ``x`` forward along the course (the robot starts at ``x = 0`` and has crossed the
   course at ``x = 10``), ``y`` to the robot's left, ``z`` up; units are metres and radians;
@@ -20,13 +18,13 @@ from dataclasses import asdict, dataclass, field, replace
 PROFILES = ("quick", "full")
 PROFILE_ENV = "HUSKY_PROFILE"
 
-#: World seeds at or above this value are reserved for evaluation worlds (planning chapters).
-#: Data collection refuses to produce them, so a training world can never be an evaluation world.
+#: World seeds at or above this value are reserved for evaluation worlds (planning chapters): data
+#: collection refuses to produce them, so a training world can never be an evaluation world.
 EVAL_SEED_BASE = 2**31
 
 
 class ConfigError(ValueError):
-    """A configuration value or profile name that the course cannot use."""
+    """A configuration value, profile or world name that the course cannot use."""
 
 
 @dataclass(frozen=True)
@@ -86,8 +84,8 @@ class CameraConfig:
     fov_deg: float = 130.0  #: the lab's value; chapter 1 shows why 90 is too narrow
     near: float = 0.02
     far: float = 5.0
-    mount_forward: float = 0.45  #: ahead of the base centre, on the collision cylinder, behind the bumper (m)
-    mount_height: float = 0.40  #: above the ground (m)
+    mount_forward: float = 0.45  #: m ahead of the base centre, on the collision cylinder, behind the bumper
+    mount_height: float = 0.40  #: m above the ground
 
 
 @dataclass(frozen=True)
@@ -152,10 +150,8 @@ class CalibrationConfig:
 class TrainConfig:
     """One training run's optimiser settings (see :func:`husky_course.training.trainer.fit`).
 
-    The paper used Adam at lr 1e-5, batch 32, for 3,200 epochs (12 h) on the encoder/decoder and
-    lr 1e-3, batch 16, for 2,000 epochs (6 h) on the reward net. On a 2-core CPU we use a larger
-    learning rate and batch and stop early on the validation loss (``bench_training.py`` measures
-    how long each run takes).
+    The paper: Adam, lr 1e-5, batch 32, 3,200 epochs (12 h) for the encoder/decoder; lr 1e-3, batch
+    16, 2,000 epochs (6 h) for the reward net. On 2 CPU cores: larger lr and batch, early stopping.
     """
 
     lr: float = 1e-3
@@ -169,11 +165,8 @@ class TrainConfig:
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """Sizes of the learned models that the paper fixes or that we chose once for every model.
-
-    The image size and the number of primitives are not repeated here: every model reads them
-    from :class:`SimConfig` (``camera.size``, ``primitives.n``) through :func:`model_dims`.
-    """
+    """Sizes of the learned models that the paper fixes or that we chose once for every model (image
+    size and primitives come from :class:`SimConfig` through :func:`model_dims`, never repeated)."""
 
     latent: int = 15  #: the encoder's latent size (paper, Section 3.4)
     rnn_horizon: int = 5  #: steps the RNN look-ahead is trained to predict (chapter 6)
@@ -245,8 +238,8 @@ class GuaranteeConfig:
     A Gaussian over the memory student's last layer. Prior: centred on the DAgger weights, deviation
     ``prior_scale`` times their RMS, fixed before any certificate world is seen. Posterior: fitted on
     ``finetune_worlds`` of the ``worlds`` training worlds (collection ``collection_seed``, used by
-    nothing else), certified on all of them with ``draws_per_world`` draws per world, then measured
-    on ``heldout_worlds`` of evaluation set ``heldout_set`` (0 reports the planners, 1 tunes).
+    nothing else), certified on all of them, then measured on ``heldout_worlds`` of evaluation set
+    ``heldout_set`` (0 reports the planners, 1 tunes).
     """
 
     collection_seed: int = 3
@@ -310,9 +303,8 @@ def _profiles() -> dict[str, Profile]:
     }
 
 
-#: Minutes to build each artifact on 2 CPU cores, measured from the progress bars of a clean
-#: ``train all`` (quick) and a clean fresh-clone ``make book`` (full), rounded; used only for the
-#: one-line notice a notebook prints before a build (:func:`husky_course.progress.announce_build`).
+#: Minutes to build each artifact on 2 CPU cores (clean ``train all`` quick, fresh-clone ``make book``
+#: full), rounded; only for the notice printed before a build (:func:`husky_course.progress.announce_build`).
 BUILD_MINUTES: dict[str, dict[str, float]] = {
     "quick": {
         "dataset": 0.1, "encoder_decoder": 0.7, "reward_net": 0.1, "safety_image": 0.2, "safety_prim": 0.2,
@@ -339,14 +331,22 @@ def world_kind(sim: SimConfig) -> str:
     return "moving" if isinstance(sim.world, MovingWorldConfig) else "static"
 
 
+def world_flag(sim: SimConfig) -> str:
+    """The command-line flag that selects ``sim``'s course (empty for the default, static)."""
+    return " --world moving" if world_kind(sim) == "moving" else ""
+
+
+def sim_for_world(sim: SimConfig, kind: str) -> SimConfig:
+    """``sim`` on the static or the moving course (everything else the same)."""
+    if world_kind(sim) == check_world_kind(kind):
+        return sim
+    base = {f: getattr(sim.world, f) for f in WorldConfig.__dataclass_fields__}
+    return replace(sim, world=MovingWorldConfig(**base) if kind == "moving" else WorldConfig(**base))
+
+
 def with_world(profile: Profile, kind: str) -> Profile:
     """``profile`` on the static or the moving course (same everything else; artifacts keyed by it)."""
-    w = profile.sim.world
-    if world_kind(profile.sim) == check_world_kind(kind):
-        return profile
-    base = {f: getattr(w, f) for f in WorldConfig.__dataclass_fields__}
-    world = MovingWorldConfig(**base) if kind == "moving" else WorldConfig(**base)
-    return replace(profile, sim=replace(profile.sim, world=world))
+    return replace(profile, sim=sim_for_world(profile.sim, kind))
 
 
 def check_profile_name(name: str) -> str:
@@ -397,11 +397,3 @@ def config_hash(cfg: object) -> str:
     text = json.dumps(to_dict(cfg), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:12]
 
-
-__all__ = [
-    "EVAL_SEED_BASE", "PROFILES", "WORLD_KINDS", "CalibrationConfig", "CameraConfig", "ConfigError",
-    "DataConfig", "EvalPlan", "GuaranteeConfig", "MemoryConfig", "ModelConfig", "ModelDims",
-    "MovingWorldConfig", "OracleConfig", "PrimitiveConfig", "Profile", "SimConfig", "TrainConfig",
-    "TrainingPlan", "WorldConfig", "check_profile", "check_profile_name", "check_world_kind", "config_hash",
-    "get_profile", "model_dims", "replace", "to_dict", "with_world", "world_kind",
-]

@@ -10,6 +10,10 @@ geometry (perfect perception):
 
 The side walls are always known. The gap between the two is what memory can buy; the gap between
 ``memory=True`` and the oracle (every obstacle, seen or not) is what no camera-based planner can.
+Both read the course as it stands at time 0 (the static course).
+
+:class:`SnapshotPlanner` is chapter 10's counterpart on the moving course: every cylinder where it
+is now, none of its motion.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import numpy as np
 
 from ..config import OracleConfig
 from ..planners.base import EpisodeStart, Planner
+from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand_with, rank_plans
 
@@ -59,4 +64,44 @@ class SeenObstaclesPlanner(Planner):
         return int(ranking.choice[0][0])
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        self._remaining -= 1
+
+
+class SnapshotPlanner(Planner):
+    """Exact replanning over every cylinder where it stands *now*, as if it stood still (chapter 10).
+
+    Privileged like :class:`SeenObstaclesPlanner`, an analysis tool: at step ``k`` it knows every
+    cylinder's true position at time ``k`` (perfect perception of the present, unlimited field of
+    view) but not where a cylinder is going. Against the space-time oracle, which knows both, it
+    measures what knowing the motion is worth.
+    """
+
+    name = "snapshot (every position now, no motion)"
+    privileged = True
+
+    def __init__(self, oracle: OracleConfig | None = None) -> None:
+        super().__init__()
+        self.oracle = oracle or OracleConfig()
+        self._sim: Simulator | None = None
+        self._time = self._remaining = 0
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        if start.sim is None or start.sim.world is None:
+            raise RuntimeError("SnapshotPlanner is privileged: run it with run_episode")
+        self._sim, self._time, self._remaining = start.sim, 0, start.max_primitives
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._sim is not None and self._sim.world is not None and pose is not None
+        world, library = self._sim.world, self._sim.library
+        now = world.obstacles_at(float(self._time))  # a frozen copy: positions at this step, no speeds
+        check = disc_check(now, world.wall_y, world.config.robot_radius, self.oracle.cap)
+        lattice = expand_with(check, library, np.asarray(pose, float), max(self._remaining, 1))
+        ranking = rank_plans(lattice, np.abs(library.offsets), self.oracle.cap, self.oracle.quantum)
+        keys = ranking.keys[0][0]
+        self.last_scores = -(keys - keys.max()) / 1e6
+        return int(ranking.choice[0][0])
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        self._time += 1
         self._remaining -= 1

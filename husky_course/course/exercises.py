@@ -138,3 +138,36 @@ def check_worlds_for_pac_bayes(train_cost: float, kl: float, bound: float, n: in
     if n > MIN_WORLDS and pac_bayes_kl_bound(train_cost, kl, n - 1, delta) <= bound:
         raise AssertionError(f"{n - 1} worlds already give a bound of at most {bound}: find the fewest")
     return _ok(f"{n} worlds: bound {pac_bayes_kl_bound(train_cost, kl, n, delta):.4f} <= {bound}")
+
+
+def check_mover_position(world_seed: int, sim: SimConfig, index: int, t: float, y: float) -> bool:
+    """Chapter 10, exercise 1: where moving cylinder ``index`` of world ``world_seed`` is at time ``t``.
+
+    The right answer walks from the cylinder's start at its speed and reflects at ``|y| = W/2 - r``
+    (within 1 mm of :meth:`husky_course.sim.world.World.obstacles_at`).
+    """
+    from ..sim.world import make_world
+
+    world = make_world(world_seed, sim.world)
+    if index not in world.moving:
+        movers = world.moving.tolist()
+        raise AssertionError(f"cylinder {index} does not move in this world: pick one of {movers}")
+    true = float(world.obstacles_at(float(t))[index, 1])
+    if abs(float(y) - true) > 1e-3:
+        lo = -world.wall_y + world.obstacles[index, 2]
+        raise AssertionError(
+            f"not quite: it starts at y = {world.obstacles[index, 1]:.3f} with speed "
+            f"{world.speeds[index]:+.3f} m per step and bounces between {lo:.3f} and {-lo:.3f} "
+            "(its surface touching a wall)"
+        )
+    return _ok(f"cylinder {index} is at y = {true:.3f} m at time {t}")
+
+
+def check_sample_time(step: int, sample: int, samples: int, t: float) -> bool:
+    """Chapter 10, exercise 2: the time of recorded sample ``sample`` of the primitive started at ``step``."""
+    true = step + sample / (samples - 1)
+    if abs(float(t) - true) > 1e-9:
+        raise AssertionError(
+            "not quite: a primitive takes one step; its first sample is at its start, its last at its end"
+        )
+    return _ok(f"sample {sample} of {samples} of the primitive started at step {step} is at time {true:.4f}")

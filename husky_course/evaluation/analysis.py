@@ -6,6 +6,7 @@ import numpy as np
 
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
+from ..sim.world import World
 from .episodes import Episode
 
 
@@ -19,14 +20,27 @@ def collision_cause(episode: Episode, sim: Simulator) -> str:
     """
     if not episode.collided:
         raise ValueError("the episode did not collide")
-    world = sim.load(episode.world_seed)
-    decision = episode.poses[-2]
-    path = sim.library.path_from(decision, episode.actions[-1])
-    hit_pose = path[sim.contact_along(path)]
-    radius = world.config.robot_radius
-    if abs(hit_pose[1]) + radius > world.wall_y:
+    hit, world, t = obstacle_hit(episode, sim)
+    if hit < 0:
         return "wall"
-    gap = np.hypot(*(world.obstacles[:, :2] - hit_pose[:2]).T) - world.obstacles[:, 2] - radius
     eyes = sim if isinstance(sim, FastSimulator) else FastSimulator(sim.config)
     eyes.load(world)
-    return "in view" if int(np.argmin(gap)) in eyes.visible_obstacles(decision) else "out of view"
+    return "in view" if hit in eyes.visible_obstacles(episode.poses[-2], t) else "out of view"
+
+
+def obstacle_hit(episode: Episode, sim: Simulator) -> tuple[int, World, int]:
+    """``(index, world, step)``: the cylinder a colliding episode's last primitive touched first
+    (``-1`` for a side wall), its world, and the step that primitive started at (its time)."""
+    if not episode.collided:
+        raise ValueError("the episode did not collide")
+    world = sim.load(episode.world_seed)
+    t = episode.n_prims - 1
+    path = sim.library.path_from(episode.poses[-2], episode.actions[-1])
+    k = sim.contact_along(path, t)
+    hit_pose, when = path[k], t + k / max(len(path) - 1, 1)
+    radius = world.config.robot_radius
+    if abs(hit_pose[1]) + radius > world.wall_y:
+        return -1, world, t
+    obs = world.obstacles_at(when)
+    gap = np.hypot(*(obs[:, :2] - hit_pose[:2]).T) - obs[:, 2] - radius
+    return int(np.argmin(gap)), world, t

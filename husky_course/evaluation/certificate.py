@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..config import MemoryConfig, Profile, SimConfig, to_dict
+from ..config import MemoryConfig, Profile, SimConfig, to_dict, world_flag
 from ..data.io import DatasetError, atomic_save_npz, atomic_write_bytes, load_npz
 from ..data.store import model_dir
 from ..engines import ENGINE, map_tasks
@@ -267,7 +267,8 @@ def load_certificate(profile: Profile) -> CertificateResult:
     if not _json_path(run, profile).is_file():
         raise CheckpointError(
             f"no certificate for profile {profile.name!r} in the artifact store (expected {run}); build it "
-            f"with `python -m husky_course train certificate --profile {profile.name}`"
+            f"with `python -m husky_course train certificate "
+            f"--profile {profile.name}{world_flag(profile.sim)}`"
         )
     layer = GaussianLayer.from_arrays(load_npz(run / "posterior.npz"))
 

@@ -11,6 +11,11 @@ concatenated and mapped to the predicted steps (out of ``horizon``) that the bes
 starting with each primitive survives, the oracle's own survival labels. Memory lives in the map,
 not in a recurrent state: the map is what lets a planner remember an obstacle beside the robot,
 and it costs one small convolution per decision.
+
+On the moving course (chapter 10) the map has a second channel, the previous image's scan moved
+into the current frame by dead reckoning (:func:`map_channels`): set beside the current image,
+it shows which way each cylinder walked, which the map of everything seen cannot (the map
+replaces what the camera sees again).
 """
 
 from __future__ import annotations
@@ -19,9 +24,15 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from ..config import ModelDims
+from ..config import ModelDims, SimConfig, world_kind
 from .base import DEFAULT_DIMS, make_spec, mlp
 from .paper import Encoder
+
+
+def map_channels(sim: SimConfig) -> int:
+    """Map channels the student reads: 1 (everything seen) on the static course, 2 on the moving one
+    (and the previous image's scan)."""
+    return 2 if world_kind(sim) == "moving" else 1
 
 
 class MemoryNet(nn.Module):
@@ -29,14 +40,17 @@ class MemoryNet(nn.Module):
 
     HIDDEN = (16, 32, 64)  #: map channels, map channels, joint hidden width
 
-    def __init__(self, horizon: int, map_cells: int, dims: ModelDims = DEFAULT_DIMS) -> None:
+    def __init__(
+        self, horizon: int, map_cells: int, dims: ModelDims = DEFAULT_DIMS, channels: int = 1
+    ) -> None:
         super().__init__()
         c1, c2, hidden = self.HIDDEN
-        self.spec = make_spec("memory", dims, (*self.HIDDEN, map_cells, horizon))
-        self.horizon, self.map_cells = int(horizon), int(map_cells)
+        extra = (channels,) if channels != 1 else ()  # the static student's spec predates channels
+        self.spec = make_spec("memory", dims, (*self.HIDDEN, map_cells, horizon, *extra))
+        self.horizon, self.map_cells, self.channels = int(horizon), int(map_cells), int(channels)
         self.encoder = Encoder(dims)
         self.map_net = nn.Sequential(
-            nn.Conv2d(1, c1, kernel_size=5, stride=2, padding=2),
+            nn.Conv2d(self.channels, c1, kernel_size=5, stride=2, padding=2),
             nn.ELU(),
             nn.Conv2d(c1, c2, kernel_size=3, stride=2, padding=1),
             nn.ELU(),

@@ -14,10 +14,10 @@ import numpy as np
 import torch
 
 from ..config import MemoryConfig, SimConfig
-from ..models.memory import MemoryNet
+from ..models.memory import MemoryNet, map_channels
 from ..training.inference import model_device, single_thread
 from .base import EpisodeStart, Planner, check_observation, survival_scores
-from .perception import DepthScan, EgoMap
+from .perception import DepthScan, EgoMap, raster
 
 
 class MemoryPlanner(Planner):
@@ -42,20 +42,32 @@ class MemoryPlanner(Planner):
         cfg, mem = self.config, self.memory
         self.smooth = int(smooth)
         self.map = EgoMap(DepthScan(cfg), forget_behind=mem.map_behind)
+        self.channels = map_channels(cfg)
+        self._previous = np.empty((0, 2))  # the last image's scan, in the current frame (moving course)
         self._library = None
         self.last_input: tuple[np.ndarray, np.ndarray] | None = None
 
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
         self.map.reset()
+        self._previous = np.empty((0, 2))
         self._library = start.library
 
     def prepare(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``."""
+        """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``.
+
+        The raster is ``(cells, cells)``, or ``(2, cells, cells)`` on the moving course: the map,
+        then the previous image's scan (empty at the first step).
+        """
         image = check_observation(obs, self.config.camera.size)
         self.map.add(image)
         m = self.memory
-        self.last_input = (image, self.map.raster(m.map_cells, m.map_behind, m.map_ahead, m.map_half_width))
+        grid = self.map.raster(m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
+        if self.channels == 2:
+            before = raster(self._previous, m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
+            grid = np.stack([grid, before])
+            self._previous = self.map.scan(image)
+        self.last_input = (image, grid)
         return self.last_input
 
     @torch.no_grad()
@@ -79,3 +91,4 @@ class MemoryPlanner(Planner):
             raise RuntimeError("call reset(start) before observe()")
         end = self._library.local_paths[action, -1]
         self.map.move(float(end[0]), float(end[1]))
+        self._previous = self._previous - end[:2]

@@ -45,6 +45,18 @@ class DepthScan:
         return np.stack([self.camera.mount_forward + d[seen], d[seen] * self.u[seen]], axis=1)
 
 
+def raster(points: np.ndarray, cells: int, behind: float, ahead: float, half_width: float) -> np.ndarray:
+    """Robot-frame points ``(m, 2+)`` as a ``(cells, cells)`` occupancy image (see :meth:`EgoMap.raster`)."""
+    out = np.zeros((cells, cells), np.float32)
+    if not len(points):
+        return out
+    i = np.floor((points[:, 0] + behind) / (ahead + behind) * cells).astype(int)
+    j = np.floor((half_width - points[:, 1]) / (2 * half_width) * cells).astype(int)
+    ok = (i >= 0) & (i < cells) & (j >= 0) & (j < cells)
+    out[i[ok], j[ok]] = 1.0
+    return out[::-1].copy()  # far rows at the top
+
+
 class EgoMap:
     """Obstacle points ``(x, y, r)`` in the robot's frame, from every scan so far (no privileged input).
 
@@ -95,14 +107,7 @@ class EgoMap:
         to ``ahead``, columns ``y`` from ``+half_width`` (column 0, the robot's left) to
         ``-half_width``, so the image reads like a top-down view with the robot near the bottom.
         """
-        out = np.zeros((cells, cells), np.float32)
-        if not len(self.points):
-            return out
-        i = np.floor((self.points[:, 0] + behind) / (ahead + behind) * cells).astype(int)
-        j = np.floor((half_width - self.points[:, 1]) / (2 * half_width) * cells).astype(int)
-        ok = (i >= 0) & (i < cells) & (j >= 0) & (j < cells)
-        out[i[ok], j[ok]] = 1.0
-        return out[::-1].copy()  # far rows at the top
+        return raster(self.points, cells, behind, ahead, half_width)
 
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)`` (heading unchanged)."""

@@ -6,10 +6,12 @@
   episode's return is the number of primitives survived;
 * ``terminated`` on collision, ``truncated`` after ``max_primitives`` safe primitives (the course
   is crossed);
-* ``info``: ``pose`` (x, y, yaw), ``collision``, ``world_seed``, ``step``.
+* ``info``: ``pose`` (x, y, yaw), ``collision``, ``world_seed``, ``step``, ``world``.
 
 ``reset(seed=s)`` builds the world of seed ``s`` (any seed below ``2**31`` is a valid training
-world); ``reset(options={"world_seed": w})`` picks a world without touching the RNG.
+world); ``reset(options={"world_seed": w})`` picks a world without touching the RNG, and
+``options={"world": "moving"}`` (or ``HuskyNavEnv(world="moving")``) switches to the moving-obstacle
+course (``"static"`` back): step ``k`` is time ``k`` there (see :mod:`husky_course.sim.world`).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..config import SimConfig
+from ..config import SimConfig, check_world_kind, sim_for_world, world_kind
 from .backends import make_simulator
 from .world import check_seed
 
@@ -35,12 +37,15 @@ class HuskyNavEnv(gym.Env):
         backend: str = "fast",
         config: SimConfig | None = None,
         render_mode: str | None = "rgb_array",
+        world: str | None = None,
     ) -> None:
         super().__init__()
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
-        self.sim = make_simulator(backend, config)
+        self.backend = backend
+        config = config or SimConfig()
+        self.sim = make_simulator(backend, config if world is None else sim_for_world(config, world))
         cfg = self.sim.config
         size = cfg.camera.size
         self.action_space = spaces.Discrete(self.sim.library.n)
@@ -51,8 +56,13 @@ class HuskyNavEnv(gym.Env):
         self.done = True
         self.path: list[np.ndarray] = []
 
+    @property
+    def world(self) -> str:
+        """``"static"`` or ``"moving"``: the course this environment drives on."""
+        return world_kind(self.sim.config)
+
     def _obs(self) -> np.ndarray:
-        return self.sim.depth(self.pose[None])[0]
+        return self.sim.depth(self.pose[None], self.steps)[0]
 
     def _info(self, collision: bool) -> dict[str, Any]:
         assert self.sim.world is not None
@@ -61,12 +71,19 @@ class HuskyNavEnv(gym.Env):
             "collision": collision,
             "world_seed": self.sim.world.seed,
             "step": self.steps,
+            "world": self.world,
         }
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
+        unknown = set(options or {}) - {"world_seed", "world"}
+        if unknown:
+            raise ValueError(f"unknown reset options {sorted(unknown)}: use 'world_seed' and 'world'")
+        if options and "world" in options and check_world_kind(options["world"]) != self.world:
+            self.sim.close()
+            self.sim = make_simulator(self.backend, sim_for_world(self.sim.config, options["world"]))
         if options and "world_seed" in options:
             world_seed = check_seed(options["world_seed"])
         elif seed is not None:
@@ -87,7 +104,7 @@ class HuskyNavEnv(gym.Env):
             raise ValueError(
                 f"invalid action {action!r}: expected an integer in 0..{self.action_space.n - 1}"
             )
-        result = self.sim.apply(self.pose, int(action))
+        result = self.sim.apply(self.pose, int(action), self.steps)
         self.pose = result.pose
         self.path.append(result.path)
         self.steps += 1
@@ -102,7 +119,7 @@ class HuskyNavEnv(gym.Env):
             return None
         if self.sim.world is None:
             raise RuntimeError("call reset() before render()")
-        return self.sim.rgb(self.pose)
+        return self.sim.rgb(self.pose, self.steps)
 
     def close(self) -> None:
         self.sim.close()

@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from ..config import Profile, TrainConfig, config_hash
+from ..config import Profile, TrainConfig, config_hash, world_flag
 from ..data.dataset import Dataset
 from ..data.io import atomic_save_npy, load_npy
 from ..data.labels import survival_steps_parallel
@@ -112,14 +112,16 @@ def load(name: str, profile: Profile, safety_weight: float = 1.0) -> Trained:
     except ValueError as exc:
         raise CheckpointError(
             f"no trained {name} model for profile {profile.name!r}: its dataset is missing; train it with "
-            f"`python -m husky_course train {name} --profile {profile.name}`"
+            f"`python -m husky_course train {name} "
+            f"--profile {profile.name}{world_flag(profile.sim)}`"
         ) from exc
     model, _, fingerprint = _parts(name, profile, ds_id, safety_weight)
     path = _checkpoint(name, fingerprint, profile)
     if not path.is_file():
         raise CheckpointError(
             f"no trained {name} model for profile {profile.name!r} (expected {path}); "
-            f"train it with `python -m husky_course train {name} --profile {profile.name}`"
+            f"train it with `python -m husky_course train {name} "
+            f"--profile {profile.name}{world_flag(profile.sim)}`"
         )
     return Trained(model, load_model(path, model, fingerprint), str(path), fingerprint)
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import torch
 
-from ..config import OracleConfig, Profile, to_dict
+from ..config import OracleConfig, Profile, to_dict, world_flag
 from ..data.store import model_dir
-from ..models.memory import MemoryNet
+from ..models.memory import MemoryNet, map_channels
 from .trainer import CheckpointError, History, load_model
 
 
@@ -22,7 +22,7 @@ def new_memory_net(profile: Profile) -> MemoryNet:
     """A fresh :class:`~husky_course.models.memory.MemoryNet`, seeded by ``profile.memory.train.seed``."""
     mem = profile.memory
     torch.manual_seed(mem.train.seed)
-    return MemoryNet(mem.label_horizon, mem.map_cells, profile.dims)
+    return MemoryNet(mem.label_horizon, mem.map_cells, profile.dims, map_channels(profile.sim))
 
 
 def memory_fingerprint(profile: Profile) -> dict:
@@ -51,7 +51,8 @@ def load_memory(profile: Profile) -> tuple[MemoryNet, History, str]:
     if not final.is_file():
         raise CheckpointError(
             f"no trained memory model for profile {profile.name!r} (expected {final}); "
-            f"train it with `python -m husky_course train memory --profile {profile.name}`"
+            f"train it with `python -m husky_course train memory "
+            f"--profile {profile.name}{world_flag(profile.sim)}`"
         )
     model = new_memory_net(profile)
     history = load_model(final, model, final_fingerprint(profile))

@@ -163,7 +163,7 @@ def map_player(sim: Simulator, episode: Episode, frames: list[MapFrame], interva
         if with_raster:
             ax = axes[0, 1]
             ax.clear()
-            ax.imshow(f.raster, cmap="Greys", vmin=0, vmax=1)
+            ax.imshow(f.raster if f.raster.ndim == 2 else f.raster[0], cmap="Greys", vmin=0, vmax=1)
             ax.set_title("what the student reads: its map", fontsize=9)
             ax.set_xticks([])
             ax.set_yticks([])
@@ -172,3 +172,26 @@ def map_player(sim: Simulator, episode: Episode, frames: list[MapFrame], interva
     html = offline_jshtml(anim)
     plt.close(fig)
     return html
+
+
+def course_frame(sim: Simulator, episode: Episode, step: int, title: str = "") -> plt.Figure:
+    """The course at time ``step`` (cylinders where they are then) with the robot's path so far."""
+    world = sim.load(episode.world_seed)
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    step = min(step, len(episode.poses) - 1)
+    draw_world(world, ax, episode.poses[step], t=step)
+    samples = sim.library.config.samples
+    draw_path(episode.path[: 1 + step * samples], ax, lw=2)
+    hit = episode.collided and step == len(episode.poses) - 1
+    if hit:
+        draw_robot(episode.poses[step], world.config.robot_radius, ax, "tab:red")
+    end = " (collision)" if hit else ""
+    ax.set_title(f"{title}time {step} of {len(episode.poses) - 1}{end}", fontsize=9)
+    return fig
+
+
+def course_player(sim: Simulator, episode: Episode, title: str = "") -> str:
+    """HTML of a player over an episode's steps: the course at every time, the robot's path so far
+    (moving cylinders where they are at that time; :func:`figure_player`, no kernel, no CDN)."""
+    frames = [{"sim": sim, "episode": episode, "step": k, "title": title} for k in range(len(episode.poses))]
+    return figure_player(course_frame, frames)

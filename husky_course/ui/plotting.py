@@ -15,16 +15,26 @@ from ..sim.world import World
 DEPTH_CMAP = "viridis"  # perceptually uniform, as in the paper's Figure 2
 
 
-def draw_world(world: World, ax: Axes | None = None, robot_pose: np.ndarray | None = None) -> Axes:
-    """Top-down map: walls, cylinders, the course's start and finish lines, the robot's disc."""
+MOVER_COLOUR = "tab:purple"  #: moving cylinders, in every figure
+
+
+def draw_world(
+    world: World, ax: Axes | None = None, robot_pose: np.ndarray | None = None, t: float = 0.0
+) -> Axes:
+    """Top-down map: walls, cylinders (at time ``t``; moving ones purple, with an arrow for one step
+    of their motion), the course's start and finish lines, the robot's disc."""
     ax = ax or plt.gca()
     cfg = world.config
     half = world.wall_y
     for side in (-1, 1):
         y0 = half if side > 0 else -half - cfg.wall_thickness
         ax.add_patch(Rectangle((-1, y0), cfg.length + 2, cfg.wall_thickness, color="0.5"))
-    for x, y, r in world.obstacles:
-        ax.add_patch(Circle((x, y), r, color="tab:orange"))
+    movers = set(world.moving.tolist())
+    now, soon = world.obstacles_at(t), world.obstacles_at(t + 1.0)
+    for i, (x, y, r) in enumerate(now):
+        ax.add_patch(Circle((x, y), r, color=MOVER_COLOUR if i in movers else "tab:orange"))
+        if i in movers and abs(soon[i, 1] - y) > 1e-9:
+            ax.annotate("", (x, soon[i, 1]), (x, y), arrowprops={"arrowstyle": "->", "color": MOVER_COLOUR})
     ax.axvline(0, color="0.7", ls=":", lw=1)
     ax.axvline(cfg.length, color="tab:green", ls="--", lw=1)
     pose = world.start if robot_pose is None else np.asarray(robot_pose)
@@ -187,13 +197,14 @@ def markdown_table(
 def draw_collisions(sim, episodes: Sequence, title: Callable[[object], str], most: int = 4) -> plt.Figure:
     """Up to ``most`` colliding episodes side by side: map, path, and the robot red where it touched.
 
-    ``title(episode)`` gives each panel's title; ``sim`` reloads each episode's world.
+    ``title(episode)`` gives each panel's title; ``sim`` reloads each episode's world. The cylinders
+    are drawn where they stood when the colliding primitive started (they move on the moving course).
     """
     shown = list(episodes)[:most]
     fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.2), squeeze=False)
     for ax, e in zip(axes[0], shown, strict=True):
         world = sim.load(e.world_seed)
-        draw_world(world, ax, e.poses[0])
+        draw_world(world, ax, e.poses[0], t=e.n_prims - 1)
         draw_path(e.path, ax, lw=2)
         draw_robot(e.poses[-1], world.config.robot_radius, ax, "tab:red")
         ax.set_title(title(e), fontsize=9)

@@ -173,7 +173,7 @@ def draw_planner_step(
     real = (
         None
         if (episode.collided and step == len(episode.actions) - 1)
-        else sim.depth(episode.poses[step + 1][None])[0]
+        else sim.depth(episode.poses[step + 1][None], step + 1)[0]
     )
     for j, (img, title) in enumerate(
         ((obs, "image now"), (predicted, "predicted next"), (real, "real next"))
@@ -268,7 +268,7 @@ def primitive_explorer(
         show_depth(obs, axes[1], "image now")
         if predicted is not None:
             show_depth(predicted, axes[2], "predicted next")
-        real = sim.depth(result.pose[None])[0]
+        real = sim.depth(result.pose[None], 1)[0]
         show_depth(real, axes[3], "real next" + (" (stopped at contact)" if result.collided else ""))
         fig.tight_layout()
         return fig

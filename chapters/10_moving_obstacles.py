@@ -1,0 +1,252 @@
+# %% [markdown]
+# # 10. Moving obstacles
+#
+# **Learning objectives.** After this chapter you can
+#
+# - define a world whose obstacles move, with time measured in the robot's own steps, and make both
+#   simulators agree on it;
+# - plan exactly in space-time with the lattice search of the earlier chapters;
+# - measure which planners of the static course still work when the obstacles move, and why;
+# - train the memory student on moving worlds and judge it against the space-time oracle.
+#
+# The paper closes with an open question: "one particularly interesting research topic is the
+# application of such a learning based motion planner in environments where obstacles are
+# dynamically changing." This chapter answers it in the simulator.
+#
+# **The moving course.** It is the static course of the same seed, and then some cylinders walk:
+# each chosen one moves across the course (along `y`) at a constant speed and bounces off the side
+# walls; the others stand still. Time is counted in primitive steps: the robot's `k`-th image is
+# taken at time `k`, and the samples of the primitive it then plays back are at times between `k`
+# and `k + 1`. Why this model: crossing traffic is what opens and closes the gaps the robot chooses
+# between, and what a forward-facing camera sees least of (a cylinder can walk in from outside the
+# field of view); motion along `y` only keeps the obstacles' spread along the course, so the course
+# is as long in obstacles as the static one; and the same seed gives the same layout at time 0, so
+# the two courses are compared world by world. Cylinders pass through one another, which keeps
+# every position a closed-form function of the seed and the time.
+
+# %%
+import matplotlib.pyplot as plt
+import numpy as np
+from IPython.display import HTML, Markdown, display
+
+from husky_course.config import get_profile, with_world
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
+from husky_course.course.ceiling import SnapshotPlanner
+from husky_course.data.calibration import mean_interval, video_lengths
+from husky_course.evaluation.analysis import obstacle_hit
+from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
+from husky_course.imitation.dagger import get_memory
+from husky_course.planners.registry import make_planner
+from husky_course.sim.fast import FastSimulator
+from husky_course.ui import animation, plotting
+from husky_course.ui.plotting import markdown_table
+
+profile = get_profile()
+moving = with_world(profile, "moving")
+N, REPORT = profile.eval.worlds, profile.eval.seed  # the reporting set: nothing is tuned on it
+W = profile.eval.workers
+sim, sim_static = FastSimulator(moving.sim), FastSimulator(profile.sim)
+wc = moving.sim.world
+movers = round(wc.moving_fraction * wc.n_obstacles)
+print(f"profile {profile.name}: {N} held-out worlds of evaluation set {REPORT}")
+print(f"{movers} of {wc.n_obstacles} cylinders move, at {wc.speed_range[0]}-{wc.speed_range[1]} m per step "
+      f"(the robot advances {moving.sim.primitives.advance} m per step)")
+
+# %% [markdown]
+# ## The world over ten steps
+#
+# One held-out world with the space-time oracle driving (below). Moving cylinders are purple, their
+# arrows show where they will be one step later. Scrub through the ten steps: the oracle threads
+# between cylinders that are not yet where it passes, or no longer there.
+
+# %%
+world_seed = int(eval_world_seeds(1, REPORT)[0])
+shown = run_episode(make_planner("oracle"), sim, world_seed)
+display(HTML(animation.course_player(sim, shown, title="space-time oracle, ")))
+
+# %% [markdown]
+# ## Both simulators, at the right times
+#
+# The fast simulator places the cylinders where they are at each query's time: per image for depth,
+# per recorded sample for contact. The PyBullet reference moves the bodies themselves
+# (`resetBasePositionAndOrientation`) before every image and every sample. The test suite renders
+# views and plays primitives back at times it draws at random and requires the same pixels (within
+# the float precision of PyBullet's depth buffer) and the same contact outcomes
+# (`tests/test_fast_vs_pybullet.py`); here is one view at three times, from the start pose.
+
+# %%
+world = sim.load(world_seed)
+fig, axes = plt.subplots(1, 3, figsize=(10, 3))
+for ax, t in zip(axes, (0, 2, 4), strict=True):
+    plotting.show_depth(sim.depth(world.start[None], t)[0], ax, f"from the start pose, time {t}")
+plt.show()
+
+# %% [markdown]
+# ## Calibration: the random policy on both courses
+#
+# The static course was calibrated so that the random policy survives about as many primitives per
+# video as the paper reports. The same videos (same worlds, same random primitives, the calibration's
+# own collection seed) on the moving course:
+
+# %%
+cal = profile.calibration
+lengths = {kind: video_lengths(p.sim, cal.videos, cal.seed) for kind, p in (("static", profile), ("moving", moving))}
+rows = []
+for kind, ls in lengths.items():
+    mean, lo, hi = mean_interval(ls)
+    rows.append({"course": kind, "videos": len(ls), "mean primitives per video": mean,
+                 "95% interval": f"[{lo:.2f}, {hi:.2f}]"})
+display(Markdown(markdown_table(rows)))
+(ms, ls_, hs), (mm, lm, hm) = (mean_interval(x) for x in lengths.values())
+overlap = lm <= hs and ls_ <= hm
+display(Markdown(
+    f"The paper's random videos last {cal.target} primitives. On the static course the random policy "
+    f"survives {ms:.2f}, on the moving one {mm:.2f}: "
+    + ("the two intervals overlap, so a random walk does not notice the motion at this resolution. "
+       if overlap else f"the moving course is {'harder' if mm < ms else 'easier'} for a random walk. ")
+    + "A random policy does not aim for gaps, so it is the planners below that tell the courses apart."))
+
+# %% [markdown]
+# ## Planning in space-time
+#
+# The robot cannot wait: every primitive takes one step, so every state at depth `k` of the lattice
+# search (chapter 7) is reached at time `k`, and the lattice is already a lattice in space-time. On
+# the moving course each edge is checked against the cylinders where they are at its samples'
+# times; nothing else changes. The test suite checks this against brute force (every sequence of
+# primitives played back in the simulator) on small cases.
+#
+# Two privileged planners frame everything else. The **space-time oracle** knows every cylinder's
+# motion. The **snapshot** planner knows where every cylinder is *now* (at every step, with no
+# field of view to limit it), replans at every step, but assumes they stand still: what a perfect
+# perception of the present, without motion, is worth.
+
+# %% [markdown]
+# ## Every planner on the moving course
+#
+# On the reporting set (the same held-out worlds on both courses). The static planners run as they
+# are; the memory student of chapter 8 (trained on the static course) sits beside a memory student
+# trained by the same DAgger recipe on moving worlds. That one reads a second map channel: the
+# previous image's scan moved into the current frame, so that two successive views of a cylinder
+# are side by side.
+
+# %%
+LOOK_AHEAD = 2  # as in chapters 7 and 8
+student_moving = get_memory(moving, progress=False)  # `python -m husky_course train memory --world moving`
+display(Markdown(markdown_table([
+    {"round": r["round"], "who drives": r["acting"], "states added": r["states"],
+     "success in its training worlds": r["success_in_its_worlds"]} for r in student_moving.rounds])))
+
+
+def build(name: str, course) -> object:
+    """The planner ``name``; learned ones trained on the static course unless said otherwise."""
+    if name == "distilled":
+        return make_planner(name, profile=profile, look_ahead=LOOK_AHEAD)
+    if name == "memory (static-trained)":
+        return make_planner("memory", profile=profile)
+    if name == "memory (moving-trained)":
+        return make_planner("memory", profile=moving)
+    if name == "snapshot":
+        return SnapshotPlanner()
+    return make_planner(name, **({"config": course.sim} if name == "heuristic" else {}))
+
+
+names = ["random", "heuristic", "mapping", "distilled", "memory (static-trained)", "memory (moving-trained)",
+         "snapshot", "oracle"]
+on_static = ["heuristic", "mapping", "distilled", "memory (static-trained)", "oracle"]
+res = {n: evaluate(build(n, moving), N, REPORT, sim=sim, progress=False, workers=W) for n in names}
+res_static = {n: evaluate(build(n, profile), N, REPORT, sim=sim_static, progress=False, workers=W)
+              for n in on_static}
+rows = [{"planner": n, "success (moving)": r.success_rate,
+         "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]",
+         "collisions <= (95%)": r.collision_rate_upper95, "mean prims": r.mean_prims,
+         "success (static)": f"{res_static[n].success_rate:.3f}" if n in res_static else "-"}
+        for n, r in res.items()]
+display(Markdown(markdown_table(rows)))
+
+# %%
+fig, ax = plt.subplots(figsize=(9, 3.6))
+x = np.arange(len(names))
+s = np.array([res[n].success_rate for n in names])
+c = np.array([res[n].success_ci95 for n in names])
+ax.bar(x, s, yerr=[s - c[:, 0], c[:, 1] - s], capsize=4, color="tab:purple", label="moving course")
+st = [res_static[n].success_rate if n in res_static else np.nan for n in names]
+ax.scatter(x, st, marker="_", s=400, color="k", zorder=5, label="same planner, static course")
+ax.set_xticks(x, [n.replace(" (", "\n(") for n in names], fontsize=8)
+ax.set_ylabel("success rate")
+ax.set_ylim(0, 1.05)
+ax.legend(fontsize=8)
+ax.set_title(f"{N} held-out worlds, exact 95% intervals", fontsize=10)
+plt.show()
+
+# %%
+orc, snap = res["oracle"], res["snapshot"]
+stud, old = res["memory (moving-trained)"], res["memory (static-trained)"]
+ratio = stud.success_rate / orc.success_rate
+drops = {n: res_static[n].success_rate - res[n].success_rate for n in on_static if n != "oracle"}
+worst = max(drops, key=drops.get)
+uncrossable, collided = round((1 - orc.crossable_rate) * orc.worlds), round(orc.collision_rate * orc.worlds)
+text = (
+    f"The space-time oracle crosses {orc.success_rate:.1%} of the moving worlds; it reports {uncrossable} of "
+    f"the {orc.worlds} uncrossable and collides in {collided}. Knowing only where every cylinder is now, the "
+    f"snapshot planner crosses {snap.success_rate:.1%}: on this course, knowing the motion is worth "
+    f"{orc.success_rate - snap.success_rate:.1%} of the worlds. Every static planner "
+    + ("loses" if min(drops.values()) > 0 else "but one loses")
+    + f" on the moving course, `{worst}` most ({drops[worst]:.1%} of the worlds). ")
+text += (
+    f"The memory student trained on moving worlds crosses {stud.success_rate:.1%}, {ratio:.0%} of the "
+    f"oracle, {'meeting' if ratio >= 0.9 else 'short of'} the goal of 90%; the static-trained student "
+    f"crosses {old.success_rate:.1%}. ")
+if stud.success_ci95[0] > old.success_ci95[1]:
+    text += "Training on moving worlds helps: the two intervals do not overlap. "
+else:
+    text += "The two students' intervals overlap: training on moving worlds has not measurably helped. "
+if stud.success_ci95[1] < snap.success_ci95[0]:
+    text += "The moving-trained student stays below the snapshot planner, which sees everything now."
+elif stud.success_ci95[0] > snap.success_ci95[1]:
+    text += ("It beats the snapshot planner, which sees every cylinder now but not its motion: it has "
+             "learned something of the motion from successive images.")
+else:
+    text += ("It is level with the snapshot planner (the intervals overlap), which sees every cylinder now "
+             "but not its motion: whatever it infers of the motion does not yet show.")
+display(Markdown(text))
+
+# %% [markdown]
+# ## How the moving-trained student fails
+#
+# Its collisions, split by what it hit: a moving cylinder, a standing one, or a side wall. The
+# cylinders are drawn where they stood when the colliding primitive started.
+
+# %%
+fails = [e for e in stud.episodes if e.collided]
+hits = [obstacle_hit(e, sim) for e in fails]
+kinds = ["wall" if i < 0 else ("moving cylinder" if i in w.moving else "standing cylinder") for i, w, _ in hits]
+counts = {k: kinds.count(k) for k in ("moving cylinder", "standing cylinder", "wall")}
+display(Markdown(markdown_table([counts]) if fails else "No collisions on these worlds."))
+if fails:
+    shares = {k: v / len(fails) for k, v in counts.items()}
+    share_movers = movers / wc.n_obstacles
+    display(Markdown(
+        f"{shares['moving cylinder']:.0%} of its collisions are with a moving cylinder, although "
+        f"{share_movers:.0%} of the cylinders move: "
+        + ("the motion it cannot anticipate is what ends its runs." if shares["moving cylinder"] > share_movers
+           else "the moving cylinders are not over-represented among what it hits.")))
+    mover_fails = [e for e, k in zip(fails, kinds, strict=True) if k == "moving cylinder"][:1]
+    if mover_fails:
+        display(HTML(animation.course_player(sim, mover_fails[0], title="moving-trained student, ")))
+
+# %% [markdown]
+# ## Exercises
+#
+# 1. *Where is a moving cylinder?* Take the world above (`world_seed`) and one of its moving cylinders
+#    (`sim.world.moving`). From its start `world.obstacles[i]`, its speed `world.speeds[i]` and the
+#    walls at `|y| = world.wall_y`, work out where it is at time 3.5 (it bounces when its surface
+#    touches a wall). Check with `exercises.check_mover_position(world_seed, moving.sim, i, 3.5, your_y)`.
+# 2. *Time along a primitive.* The primitive started at step 4 is recorded as
+#    `moving.sim.primitives.samples` poses. At what time is its sample 25 checked for contact? Check
+#    with `exercises.check_sample_time(4, 25, moving.sim.primitives.samples, your_t)`.
+# 3. The snapshot planner replans at every step over the cylinders where they are now. Give it the
+#    cylinders where they will be one step later instead (`world.obstacles_at(t + 1)`) and evaluate
+#    it on the tuning set (`evaluate(..., seed=1)`): how much of the gap to the oracle does one step
+#    of foresight close?
+# 4. Where on the moving course would you expect the static-trained memory student's map to mislead
+#    it? (Hint: what does the map keep of a cylinder that has walked out of the field of view?)
