@@ -1,0 +1,238 @@
+"""The moving-obstacle course (chapter 10): the world, space-time planning, the switches, the student."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+
+from husky_course.cli import main
+from husky_course.config import (
+    ConfigError,
+    MovingWorldConfig,
+    config_hash,
+    get_profile,
+    sim_for_world,
+    with_world,
+    world_kind,
+)
+from husky_course.course import exercises
+from husky_course.data.collect import play_video
+from husky_course.data.labels import survival_at
+from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
+from husky_course.planners.registry import make_planner
+from husky_course.sim.env import HuskyNavEnv
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.lattice import disc_check, expand, expand_with, survival
+from husky_course.sim.world import make_world
+
+QUICK = get_profile("quick")
+MOVING = with_world(QUICK, "moving")
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return FastSimulator(MOVING.sim)
+
+
+def test_world_switch_keys_the_config():
+    assert world_kind(QUICK.sim) == "static" and world_kind(MOVING.sim) == "moving"
+    assert isinstance(MOVING.sim.world, MovingWorldConfig)
+    assert config_hash(MOVING.sim) != config_hash(QUICK.sim)
+    assert config_hash(with_world(MOVING, "static").sim) == config_hash(QUICK.sim)
+    assert with_world(MOVING, "moving") == MOVING
+    with pytest.raises(ConfigError, match="unknown world"):
+        with_world(QUICK, "windy")
+
+
+def test_moving_world_is_the_static_world_set_in_motion():
+    cfg = MOVING.sim.world
+    for seed in range(30):
+        still, world = make_world(seed), make_world(seed, cfg)
+        movers = world.moving
+        assert len(movers) == round(cfg.moving_fraction * cfg.n_obstacles)
+        assert np.all(np.abs(world.speeds[movers]) >= cfg.speed_range[0])
+        assert np.all(np.abs(world.speeds[movers]) <= cfg.speed_range[1])
+        np.testing.assert_array_equal(world.obstacles[:, [0, 2]], still.obstacles[:, [0, 2]])
+        standing = np.setdiff1d(np.arange(cfg.n_obstacles), movers)
+        np.testing.assert_array_equal(world.obstacles[standing], still.obstacles[standing])
+        np.testing.assert_array_equal(world.start, still.start)
+        assert still.speeds is None and len(still.moving) == 0
+    again = make_world(7, cfg)
+    assert make_world(7, cfg).obstacles_at(3.25).tobytes() == again.obstacles_at(3.25).tobytes()
+
+
+def test_movers_walk_at_their_speed_and_bounce_inside_the_walls():
+    world = make_world(3, MOVING.sim.world)
+    t = np.linspace(0, 200, 20_001)
+    pos = world.obstacles_at(t)  # (T, n, 3)
+    m = world.moving
+    r = world.obstacles[m, 2]
+    assert np.all(np.abs(pos[:, m, 1]) <= world.wall_y - r + 1e-9)  # a mover's surface never crosses a wall
+    step = np.abs(np.diff(pos[..., 1], axis=0))
+    assert np.all(step <= np.abs(world.speeds) * (t[1] - t[0]) + 1e-9)  # continuous, never faster
+    moved = np.abs(pos[-1, :, 1] - pos[0, :, 1]) + step.sum(0)
+    assert np.all((moved > 0) == (world.speeds != 0))
+    np.testing.assert_allclose(pos[:, :, 0], np.broadcast_to(world.obstacles[:, 0], pos.shape[:2]))
+    # the path length walked equals speed x time (reflection keeps the speed; sampling cuts each
+    # bounce's corner by at most one sample's walk)
+    bounces = np.abs(world.speeds) * t[-1] / (2 * (world.wall_y - world.obstacles[:, 2])) + 1
+    cut = 2 * bounces * np.abs(world.speeds) * (t[1] - t[0])
+    assert np.all(np.abs(step.sum(0) - np.abs(world.speeds) * t[-1]) <= cut + 1e-9)
+
+
+def _brute_force(sim, pose, t0, horizon):
+    best = np.zeros(sim.library.n, int)
+    for seq in itertools.product(range(sim.library.n), repeat=horizon):
+        p, n = pose.copy(), 0
+        for k, a in enumerate(seq):
+            result = sim.apply(p, a, t0 + k)
+            if result.collided:
+                break
+            p, n = result.pose, n + 1
+        best[seq[0]] = max(best[seq[0]], n)
+    return best
+
+
+def test_space_time_lattice_matches_brute_force(sim):
+    """Survival from the lattice in space-time = every sequence played back at its times; the same
+    lattice with the cylinders frozen at their start would disagree (so the test can fail)."""
+    rng = np.random.default_rng(0)
+    checked = frozen_wrong = nontrivial = 0
+    for seed in range(12):
+        world = sim.load(1000 + seed)
+        t0 = int(rng.integers(1, 6))
+        pose = np.array([t0 + 0.0, world.start[1] + rng.uniform(-0.5, 0.5), 0.0])
+        if sim.contact_along(pose[None], t0) >= 0:
+            continue
+        got = survival(expand(world, sim.library, pose, 2, 0.0, t0))
+        np.testing.assert_array_equal(got, _brute_force(sim, pose, t0, 2), err_msg=f"world {world.seed}")
+        frozen = disc_check(world.obstacles, world.wall_y, world.config.robot_radius, 0.0)
+        frozen_wrong += int((survival(expand_with(frozen, sim.library, pose, 2)) != got).any())
+        nontrivial += int((got < 2).any())
+        checked += 1
+    assert checked >= 8 and nontrivial >= 4 and frozen_wrong >= 2
+
+
+def test_oracle_never_collides_on_a_world_it_calls_crossable(sim):
+    oracle = make_planner("oracle")
+    crossable = 0
+    for seed in eval_world_seeds(40, 1):
+        episode = run_episode(oracle, sim, int(seed))
+        if oracle.crossable:
+            crossable += 1
+            assert episode.success, f"world {seed}"
+    assert crossable >= 30
+
+
+def test_episode_images_are_taken_at_their_step(sim):
+    episode = run_episode(make_planner("heuristic", config=MOVING.sim), sim, int(eval_world_seeds(1, 1)[0]),
+                          record=True)
+    assert len(episode.observations) >= 3
+    for k, obs in enumerate(episode.observations):
+        np.testing.assert_array_equal(obs, sim.depth(episode.poses[k][None], k)[0])
+    late = sim.depth(episode.poses[2][None], 0)[0]
+    assert not np.array_equal(late, episode.observations[2])  # at time 0 the view would differ
+
+
+def test_labels_and_videos_use_the_states_time(sim):
+    video = play_video(sim, 0, 5, 10)
+    again = play_video(FastSimulator(MOVING.sim), 0, 5, 10)
+    assert all(np.array_equal(video[k], again[k]) for k in video)
+    for k in range(len(video["step"])):
+        np.testing.assert_array_equal(video["images"][k], sim.depth(video["poses"][k:k + 1].astype(float),
+                                                                    k)[0].astype(np.float16))
+    seeds = np.full(40, 1000 + 3)
+    world = sim.load(1003)
+    poses = np.c_[np.arange(40) % 8 + 1.0, np.linspace(-2, 2, 40), np.zeros(40)]
+    times = np.arange(40) % 8
+    timed = survival_at(seeds, poses, 3, MOVING.sim, workers=1, progress=False, times=times)
+    at_zero = survival_at(seeds, poses, 3, MOVING.sim, workers=1, progress=False)
+    assert (timed != at_zero).any()
+    lattice = expand(world, sim.library, poses[11], 3, 0.0, float(times[11]))
+    np.testing.assert_array_equal(timed[11], survival(lattice))
+    with pytest.raises(ValueError, match="one time per state"):
+        survival_at(seeds, poses, 3, MOVING.sim, workers=1, progress=False, times=times[:3])
+
+
+def test_env_world_option():
+    env = HuskyNavEnv(world="moving")
+    obs, info = env.reset(options={"world_seed": 11})
+    assert info["world"] == "moving" and env.world == "moving"
+    still = HuskyNavEnv()
+    obs_s, info_s = still.reset(options={"world_seed": 11})
+    assert info_s["world"] == "static"
+    np.testing.assert_array_equal(obs, obs_s)  # the same layout at time 0
+    differ = False
+    for _ in range(4):
+        a, b = env.step(12), still.step(12)
+        differ |= not np.array_equal(a[0], b[0])
+        if a[2] or b[2]:
+            break
+    assert differ
+    obs, info = still.reset(options={"world_seed": 11, "world": "moving"})
+    assert info["world"] == "moving"
+    with pytest.raises(ValueError, match="unknown world"):
+        env.reset(options={"world": "windy"})
+    with pytest.raises(ValueError, match="unknown reset options"):
+        env.reset(options={"wrold": "moving"})
+    env.close()
+    still.close()
+
+
+def test_cli_world_switch(tmp_path, capsys):
+    assert main(["evaluate", "--planner", "oracle", "--world", "moving", "--worlds", "5", "--seed", "1",
+                 "--json", "--no-progress", "--profile", "quick"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["world"] == "moving" and out["worlds"] == 5
+    assert main(["collect", "--profile", "quick", "--videos", "3", "--world", "moving", "--out",
+                 str(tmp_path / "m"), "--no-progress"]) == 0
+    spec = json.loads((tmp_path / "m" / "spec.json").read_text())
+    assert spec["sim"]["world"]["moving_fraction"] == MOVING.sim.world.moving_fraction
+    capsys.readouterr()
+    assert main(["evaluate", "--planner", "heuristic", "--trained-on", "moving", "--worlds", "2",
+                 "--no-progress", "--profile", "quick"]) == 2
+    assert "--trained-on applies only" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["evaluate", "--planner", "oracle", "--world", "windy"])
+
+
+def test_moving_student_reads_two_channels_and_beats_random():
+    """The quick profile's moving-trained student (built by `make test` before pytest)."""
+    student = make_planner("memory", profile=MOVING)
+    assert student.model.channels == 2 and student.channels == 2
+    assert make_planner("memory", profile=QUICK).channels == 1
+    sim = FastSimulator(MOVING.sim)
+    world = sim.load(int(eval_world_seeds(1, 1)[0]))
+    student.reset(__import__("husky_course.planners.base", fromlist=["episode_start"]).episode_start(
+        student, sim, world.seed, world.start, 10))
+    image, grid = student.prepare(sim.depth(world.start[None], 0)[0])
+    assert grid.shape == (2, MOVING.memory.map_cells, MOVING.memory.map_cells) and grid[1].sum() == 0
+    student.observe(12, None)
+    _, grid = student.prepare(sim.depth(world.start[None] + [[1.0, 0, 0]], 1)[0])
+    assert grid[1].sum() > 0  # the previous scan, moved into the new frame
+    mine = evaluate(student, 60, 1, config=MOVING.sim, progress=False, workers=2)
+    rand = evaluate(make_planner("random"), 60, 1, config=MOVING.sim, progress=False)
+    assert mine.success_ci95[0] > rand.success_ci95[1]
+    assert mine.mean_prims > rand.mean_prims + 1
+
+
+def test_sim_for_world_round_trip():
+    assert sim_for_world(sim_for_world(QUICK.sim, "moving"), "static") == QUICK.sim
+
+
+def test_exercise_checks():
+    world = make_world(5, MOVING.sim.world)
+    i = int(world.moving[0])
+    y = float(world.obstacles_at(3.5)[i, 1])
+    assert exercises.check_mover_position(5, MOVING.sim, i, 3.5, y)
+    with pytest.raises(AssertionError, match="bounces"):
+        exercises.check_mover_position(5, MOVING.sim, i, 3.5, float(world.obstacles[i, 1]))
+    still = int(np.flatnonzero(world.speeds == 0)[0])
+    with pytest.raises(AssertionError, match="does not move"):
+        exercises.check_mover_position(5, MOVING.sim, still, 3.5, 0.0)
+    assert exercises.check_sample_time(4, 25, 101, 4.25)
+    with pytest.raises(AssertionError):
+        exercises.check_sample_time(4, 25, 101, 4.2475)
