@@ -236,3 +236,16 @@ def test_exercise_checks():
     assert exercises.check_sample_time(4, 25, 101, 4.25)
     with pytest.raises(AssertionError):
         exercises.check_sample_time(4, 25, 101, 4.2475)
+
+
+def test_ceilings_order_snapshot_below_seen_motion_on_the_moving_course():
+    """Knowing the motion of what the camera has shown beats knowing every position without motion;
+    on the static course the two coincide with knowing everything (nothing moves)."""
+    from husky_course.course.ceiling import SeenMotionPlanner, SnapshotPlanner
+
+    seen = evaluate(SeenMotionPlanner(), 30, 1, config=MOVING.sim, progress=False)
+    snap = evaluate(SnapshotPlanner(), 30, 1, config=MOVING.sim, progress=False)
+    assert seen.success_rate >= snap.success_rate + 0.2
+    still = evaluate(SnapshotPlanner(), 20, 1, config=QUICK.sim, progress=False)
+    oracle = evaluate(make_planner("oracle"), 20, 1, config=QUICK.sim, progress=False)
+    assert still.success_rate == oracle.success_rate

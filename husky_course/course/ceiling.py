@@ -18,13 +18,15 @@ is now, none of its motion.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..config import OracleConfig
 from ..planners.base import EpisodeStart, Planner
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
-from ..sim.lattice import disc_check, expand_with, rank_plans
+from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 
 
 class SeenObstaclesPlanner(Planner):
@@ -64,6 +66,52 @@ class SeenObstaclesPlanner(Planner):
         return int(ranking.choice[0][0])
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        self._remaining -= 1
+
+
+class SeenMotionPlanner(Planner):
+    """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
+
+    Privileged, an analysis tool: the ceiling of a camera-based planner on the moving course. Every
+    cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
+    from then on; the others are unknown. Against the oracle, it measures what the camera never
+    shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
+    """
+
+    name = "seen so far, with motion (perfect perception)"
+    privileged = True
+
+    def __init__(self, oracle: OracleConfig | None = None) -> None:
+        super().__init__()
+        self.oracle = oracle or OracleConfig()
+        self._eyes: FastSimulator | None = None
+        self._seen: set[int] = set()
+        self._time = self._remaining = 0
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        if start.sim is None or start.sim.world is None:
+            raise RuntimeError("SeenMotionPlanner is privileged: run it with run_episode")
+        self._eyes = FastSimulator(start.sim.config)
+        self._eyes.load(start.sim.world)
+        self._seen, self._time, self._remaining = set(), 0, start.max_primitives
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._eyes is not None and self._eyes.world is not None and pose is not None
+        world = self._eyes.world
+        self._seen |= set(self._eyes.visible_obstacles(pose, float(self._time)).tolist())
+        known = np.array(sorted(self._seen), int)
+        speeds = None if world.speeds is None else world.speeds[known]
+        sub = replace(world, obstacles=world.obstacles[known], speeds=speeds)
+        library, cap = self._eyes.library, self.oracle.cap
+        lattice = expand(sub, library, np.asarray(pose, float), max(self._remaining, 1), cap, self._time)
+        ranking = rank_plans(lattice, np.abs(library.offsets), cap, self.oracle.quantum)
+        keys = ranking.keys[0][0]
+        self.last_scores = -(keys - keys.max()) / 1e6
+        return int(ranking.choice[0][0])
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        self._time += 1
         self._remaining -= 1
 
 

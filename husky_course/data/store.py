@@ -21,7 +21,7 @@ import json
 import os
 from pathlib import Path
 
-from ..config import Profile, check_profile, config_hash
+from ..config import Profile, check_profile, config_hash, world_flag
 from ..progress import announce_build
 from .collect import collect, collection_spec
 from .dataset import Dataset, load_dataset
@@ -59,7 +59,7 @@ def get_dataset(profile: Profile, workers: int | None = None, progress: bool = T
     """The profile's dataset, collected first if it is missing or unfinished."""
     path = dataset_dir(profile)
     if not (path / "meta.json").is_file():
-        announce_build("dataset", profile.name, "collect")
+        announce_build("dataset", profile.name, f"collect{world_flag(profile.sim)}")
         collect(path, profile, workers=workers or min(2, os.cpu_count() or 1), progress=progress)
     return load_dataset(path)
 

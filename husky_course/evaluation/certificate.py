@@ -236,7 +236,7 @@ def get_certificate(
     g = profile.guarantee
     run = certificate_dir(profile)
     if not _json_path(run, profile).is_file():
-        announce_build("certificate", profile.name, "train certificate")
+        announce_build("certificate", profile.name, f"train certificate{world_flag(profile.sim)}")
     model, _, _ = load_memory(profile)
     check_confidence(g.delta, g.delta_prime)  # before any work
     run.mkdir(parents=True, exist_ok=True)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..config import Profile
+from ..config import Profile, world_flag
 from ..data.collect import world_seed_for
 from ..data.io import atomic_save_npz, load_npz
 from ..data.labels import survival_at
@@ -132,7 +132,7 @@ def get_memory(profile: Profile, progress: bool = True) -> Student:
     fp = memory_fingerprint(profile)
     run = memory_dir(profile)
     if not (run / "model.pt").is_file():
-        announce_build("memory", profile.name, "train memory")
+        announce_build("memory", profile.name, f"train memory{world_flag(profile.sim)}")
     run.mkdir(parents=True, exist_ok=True)
     rounds: list[dict] = []
     parts: list[dict[str, np.ndarray]] = []

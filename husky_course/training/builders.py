@@ -141,7 +141,7 @@ def _build(
     path = run / "model.pt"
     if path.is_file():
         return Trained(model, load_model(path, model, fingerprint), str(path), fingerprint)
-    announce_build(name, profile.name, f"train {name}")
+    announce_build(name, profile.name, f"train {name}{world_flag(profile.sim)}")
     train, val = data()
     if prepare is not None:
         prepare(model)
