@@ -36,6 +36,7 @@ from husky_course.data.calibration import mean_interval, video_lengths
 from husky_course.evaluation.analysis import obstacle_hit
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
 from husky_course.imitation.dagger import get_memory
+from husky_course.planners.base import episode_start
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.ui import animation, plotting
@@ -127,9 +128,12 @@ display(Markdown(
 #
 # On the reporting set (the same held-out worlds on both courses). The static planners run as they
 # are; the memory student of chapter 8 (trained on the static course) sits beside a memory student
-# trained by the same DAgger recipe on moving worlds. That one reads a second map channel: the
-# previous image's scan moved into the current frame, so that two successive views of a cylinder
-# are side by side.
+# trained by the same DAgger recipe on moving worlds, from the space-time oracle. Its memory is what
+# lets it infer motion: it keeps the previous image's scan, moves it into the current frame by dead
+# reckoning, matches each piece of surface the camera sees now to the nearest piece it saw one step
+# before (`husky_course.planners.motion`), and reads, beside its map, two more rasters: the current
+# scan's points where they will be one and two steps later if they keep walking as they did. No
+# privileged input: the scans are its own images, the displacement its own primitive.
 
 # %%
 LOOK_AHEAD = 2  # as in chapters 7 and 8
@@ -137,6 +141,27 @@ student_moving = get_memory(moving, progress=False)  # `python -m husky_course t
 display(Markdown(markdown_table([
     {"round": r["round"], "who drives": r["acting"], "states added": r["states"],
      "success in its training worlds": r["success_in_its_worlds"]} for r in student_moving.rounds])))
+
+
+# %% [markdown]
+# What the moving-trained student reads at the third step of the world above (the oracle driving):
+# the depth image, its map, and the current scan moved one and two steps ahead.
+
+# %%
+student = make_planner("memory", profile=moving)
+student.reset(episode_start(student, sim, world_seed, shown.poses[0], moving.sim.max_primitives))
+for k in range(3):
+    image, grid = student.prepare(sim.depth(shown.poses[k][None], k)[0])
+    student.observe(shown.actions[k], None)
+fig, axes = plt.subplots(1, 4, figsize=(11, 2.9))
+plotting.show_depth(image, axes[0], "depth image, time 2")
+for ax, g, title in zip(axes[1:], grid, ("its map", "scan, one step ahead", "scan, two steps ahead"),
+                        strict=True):
+    ax.imshow(g, cmap="Greys", vmin=0, vmax=1)
+    ax.set_title(title, fontsize=9)
+    ax.set_xticks([])
+    ax.set_yticks([])
+plt.show()
 
 
 def build(name: str, course) -> object:

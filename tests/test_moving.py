@@ -22,6 +22,7 @@ from husky_course.course import exercises
 from husky_course.data.collect import play_video
 from husky_course.data.labels import survival_at
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
+from husky_course.planners.perception import raster
 from husky_course.planners.registry import make_planner
 from husky_course.sim.env import HuskyNavEnv
 from husky_course.sim.fast import FastSimulator
@@ -199,24 +200,46 @@ def test_cli_world_switch(tmp_path, capsys):
         main(["evaluate", "--planner", "oracle", "--world", "windy"])
 
 
-def test_moving_student_reads_two_channels_and_beats_random():
+def test_moving_student_reads_its_motion_channels_and_beats_random():
     """The quick profile's moving-trained student (built by `make test` before pytest)."""
+    from husky_course.planners.base import episode_start
+
     student = make_planner("memory", profile=MOVING)
-    assert student.model.channels == 2 and student.channels == 2
+    assert student.model.channels == 3 and student.channels == 3
     assert make_planner("memory", profile=QUICK).channels == 1
     sim = FastSimulator(MOVING.sim)
     world = sim.load(int(eval_world_seeds(1, 1)[0]))
-    student.reset(__import__("husky_course.planners.base", fromlist=["episode_start"]).episode_start(
-        student, sim, world.seed, world.start, 10))
+    student.reset(episode_start(student, sim, world.seed, world.start, 10))
     image, grid = student.prepare(sim.depth(world.start[None], 0)[0])
-    assert grid.shape == (2, MOVING.memory.map_cells, MOVING.memory.map_cells) and grid[1].sum() == 0
-    student.observe(12, None)
-    _, grid = student.prepare(sim.depth(world.start[None] + [[1.0, 0, 0]], 1)[0])
-    assert grid[1].sum() > 0  # the previous scan, moved into the new frame
+    cells = MOVING.memory.map_cells
+    assert grid.shape == (3, cells, cells)
+    now = raster(student.map.scan(image), cells, MOVING.memory.map_behind, MOVING.memory.map_ahead,
+                 MOVING.memory.map_half_width)
+    np.testing.assert_array_equal(grid[1], now)  # no previous scan yet: nothing is known to move
+    np.testing.assert_array_equal(grid[2], now)
     mine = evaluate(student, 60, 1, config=MOVING.sim, progress=False, workers=2)
     rand = evaluate(make_planner("random"), 60, 1, config=MOVING.sim, progress=False)
     assert mine.success_ci95[0] > rand.success_ci95[1]
     assert mine.mean_prims > rand.mean_prims + 1
+
+
+def test_lateral_velocities_from_two_scans():
+    """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step;
+    standing surfaces at 0; a piece with no match within one step's walk at 0."""
+    from husky_course.planners.motion import lateral_velocities, segments
+
+    arc = np.c_[3.0 + 0.02 * np.sin(np.linspace(0, np.pi, 9)), np.linspace(-0.2, 0.2, 9)]
+    wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
+    far = np.c_[np.full(5, 4.5), np.linspace(-3.0, -2.8, 5)]
+    before = np.concatenate([wall, arc])
+    after = np.concatenate([wall, arc + [0.0, 0.4], far])
+    assert [len(s) for s in segments(after)] == [30, 9, 5]
+    v = lateral_velocities(before, after, max_step=0.6)
+    np.testing.assert_allclose(v[30:39], 0.4)
+    np.testing.assert_allclose(v[:30], 0.0, atol=1e-12)
+    np.testing.assert_array_equal(v[39:], 0.0)  # nothing near it before: unknown, taken as standing
+    assert (lateral_velocities(before, after, max_step=0.3)[30:39] == 0).all()  # too fast to be a match
+    assert (lateral_velocities(np.empty((0, 2)), after, 0.6) == 0).all()
 
 
 def test_sim_for_world_round_trip():

@@ -12,10 +12,11 @@ starting with each primitive survives, the oracle's own survival labels. Memory 
 not in a recurrent state: the map is what lets a planner remember an obstacle beside the robot,
 and it costs one small convolution per decision.
 
-On the moving course (chapter 10) the map has a second channel, the previous image's scan moved
-into the current frame by dead reckoning (:func:`map_channels`): set beside the current image,
-it shows which way each cylinder walked, which the map of everything seen cannot (the map
-replaces what the camera sees again).
+On the moving course (chapter 10) the map has two more channels (:func:`map_channels`): the
+current scan's points where they will be one and two steps later if they keep walking as they did
+since the previous image (:mod:`husky_course.planners.motion`: the previous scan is the memory that
+motion is inferred from; the map of everything seen cannot show it, it replaces what the camera
+sees again).
 """
 
 from __future__ import annotations
@@ -30,9 +31,9 @@ from .paper import Encoder
 
 
 def map_channels(sim: SimConfig) -> int:
-    """Map channels the student reads: 1 (everything seen) on the static course, 2 on the moving one
-    (and the previous image's scan)."""
-    return 2 if world_kind(sim) == "moving" else 1
+    """Map channels the student reads: 1 (everything seen) on the static course, 3 on the moving one
+    (and the current scan one and two steps ahead)."""
+    return 3 if world_kind(sim) == "moving" else 1
 
 
 class MemoryNet(nn.Module):

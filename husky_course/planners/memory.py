@@ -17,6 +17,7 @@ from ..config import MemoryConfig, SimConfig
 from ..models.memory import MemoryNet, map_channels
 from ..training.inference import model_device, single_thread
 from .base import EpisodeStart, Planner, check_observation, survival_scores
+from .motion import lateral_velocities
 from .perception import DepthScan, EgoMap, raster
 
 
@@ -43,6 +44,8 @@ class MemoryPlanner(Planner):
         self.smooth = int(smooth)
         self.map = EgoMap(DepthScan(cfg), forget_behind=mem.map_behind)
         self.channels = map_channels(cfg)
+        world = cfg.world
+        self._max_step = float(getattr(world, "speed_range", (0.0, 0.0))[1])  # the fastest walker, per step
         self._previous = np.empty((0, 2))  # the last image's scan, in the current frame (moving course)
         self._library = None
         self.last_input: tuple[np.ndarray, np.ndarray] | None = None
@@ -56,17 +59,22 @@ class MemoryPlanner(Planner):
     def prepare(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``.
 
-        The raster is ``(cells, cells)``, or ``(2, cells, cells)`` on the moving course: the map,
-        then the previous image's scan (empty at the first step).
+        The raster is ``(cells, cells)``, or ``(3, cells, cells)`` on the moving course: the map,
+        then the current scan's points one and two steps ahead at the lateral speeds inferred from
+        the previous image's scan (:mod:`~husky_course.planners.motion`; standing still at the
+        first step, when there is no previous scan).
         """
         image = check_observation(obs, self.config.camera.size)
         self.map.add(image)
         m = self.memory
-        grid = self.map.raster(m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
-        if self.channels == 2:
-            before = raster(self._previous, m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
-            grid = np.stack([grid, before])
-            self._previous = self.map.scan(image)
+        cells = (m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
+        grid = self.map.raster(*cells)
+        if self.channels == 3:
+            now = self.map.scan(image)
+            v = lateral_velocities(self._previous, now, self._max_step)
+            ahead = [raster(now + np.c_[np.zeros(len(v)), k * v], *cells) for k in (1, 2)]
+            grid = np.stack([grid, *ahead])
+            self._previous = now
         self.last_input = (image, grid)
         return self.last_input
 
