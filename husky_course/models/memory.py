@@ -12,11 +12,11 @@ starting with each primitive survives, the oracle's own survival labels. Memory 
 not in a recurrent state: the map is what lets a planner remember an obstacle beside the robot,
 and it costs one small convolution per decision.
 
-On the moving course (chapter 10) the map has two more channels (:func:`map_channels`): the
-current scan's points where they will be one and two steps later if they keep walking as they did
-since the previous image (:mod:`husky_course.planners.motion`: the previous scan is the memory that
-motion is inferred from; the map of everything seen cannot show it, it replaces what the camera
-sees again).
+On the moving course (chapter 10) the map has two more channels (:func:`map_channels`,
+:data:`MOVING_INPUTS`): the current scan's points where they will be one step later, and where they
+will be when the robot reaches them, if they keep walking as they did since the previous image
+(:mod:`husky_course.planners.motion`: the previous scan is the memory that motion is inferred from;
+the map of everything seen cannot show it, it replaces what the camera sees again).
 """
 
 from __future__ import annotations
@@ -28,6 +28,10 @@ from torch import Tensor, nn
 from ..config import ModelDims, SimConfig, world_kind
 from .base import DEFAULT_DIMS, make_spec, mlp
 from .paper import Encoder
+
+#: what the moving-course student's three channels hold (part of its artifact's fingerprint, so a
+#: change of representation retrains it): see :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
+MOVING_INPUTS = "map; current scan one step ahead; current scan at the robot's arrival (x / advance steps)"
 
 
 def map_channels(sim: SimConfig) -> int:

@@ -46,6 +46,7 @@ class MemoryPlanner(Planner):
         self.channels = map_channels(cfg)
         world = cfg.world
         self._max_step = float(getattr(world, "speed_range", (0.0, 0.0))[1])  # the fastest walker, per step
+        self._advance = cfg.primitives.advance  # m forward per step, whatever the primitive
         self._previous = np.empty((0, 2))  # the last image's scan, in the current frame (moving course)
         self._library = None
         self.last_input: tuple[np.ndarray, np.ndarray] | None = None
@@ -60,9 +61,12 @@ class MemoryPlanner(Planner):
         """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``.
 
         The raster is ``(cells, cells)``, or ``(3, cells, cells)`` on the moving course: the map,
-        then the current scan's points one and two steps ahead at the lateral speeds inferred from
-        the previous image's scan (:mod:`~husky_course.planners.motion`; standing still at the
-        first step, when there is no previous scan).
+        then the current scan's points one step ahead at the lateral speeds inferred from the
+        previous image's scan (:mod:`~husky_course.planners.motion`; standing still at the first
+        step, when there is no previous scan), then each point where it will be when the robot
+        reaches its forward distance ``x``: every primitive advances the same distance per step
+        at a constant forward speed, so that is ``x / advance`` steps from now, and the moving
+        course seen this way is a static one (up to the bounces and the cylinders' own width).
         """
         image = check_observation(obs, self.config.camera.size)
         self.map.add(image)
@@ -72,8 +76,9 @@ class MemoryPlanner(Planner):
         if self.channels == 3:
             now = self.map.scan(image)
             v = lateral_velocities(self._previous, now, self._max_step)
-            ahead = [raster(now + np.c_[np.zeros(len(v)), k * v], *cells) for k in (1, 2)]
-            grid = np.stack([grid, *ahead])
+            soon = now + np.c_[np.zeros(len(v)), v]
+            arrival = now + np.c_[np.zeros(len(v)), v * now[:, 0] / self._advance]
+            grid = np.stack([grid, raster(soon, *cells), raster(arrival, *cells)])
             self._previous = now
         self.last_input = (image, grid)
         return self.last_input

@@ -14,7 +14,7 @@ import torch
 
 from ..config import OracleConfig, Profile, to_dict, world_flag
 from ..data.store import model_dir
-from ..models.memory import MemoryNet, map_channels
+from ..models.memory import MOVING_INPUTS, MemoryNet, map_channels
 from .trainer import CheckpointError, History, load_model
 
 
@@ -27,12 +27,15 @@ def new_memory_net(profile: Profile) -> MemoryNet:
 
 def memory_fingerprint(profile: Profile) -> dict:
     """What determines the student: its network, the memory config, the simulator and the teacher."""
-    return {
+    found = {
         "model": new_memory_net(profile).spec.to_dict(),
         "memory": to_dict(profile.memory),
         "sim": to_dict(profile.sim),
         "teacher": {"planner": "oracle", **asdict(OracleConfig())},
     }
+    if map_channels(profile.sim) == 3:  # the moving course's inputs (the static student's key predates this)
+        found["inputs"] = MOVING_INPUTS
+    return found
 
 
 def memory_dir(profile: Profile) -> Path:
