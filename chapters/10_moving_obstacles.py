@@ -132,8 +132,12 @@ display(Markdown(
 # lets it infer motion: it keeps the previous image's scan, moves it into the current frame by dead
 # reckoning, matches each piece of surface the camera sees now to the nearest piece it saw one step
 # before (`husky_course.planners.motion`), and reads, beside its map, two more rasters: the current
-# scan's points where they will be one and two steps later if they keep walking as they did. No
-# privileged input: the scans are its own images, the displacement its own primitive.
+# scan's points where they will be one step later if they keep walking as they did, and where they
+# will be *when the robot reaches them*. Every primitive advances the same distance per step at a
+# constant forward speed, so a point `x` metres ahead is reached `x / advance` steps from now: moved
+# by that many steps of its walk, the moving course becomes a static one (up to the bounces and the
+# cylinders' own width), the kind of map the static student already reads. No privileged input: the
+# scans are its own images, the displacement its own primitive.
 
 # %%
 LOOK_AHEAD = 2  # as in chapters 7 and 8
@@ -145,7 +149,8 @@ display(Markdown(markdown_table([
 
 # %% [markdown]
 # What the moving-trained student reads at the third step of the world above (the oracle driving):
-# the depth image, its map, and the current scan moved one and two steps ahead.
+# the depth image, its map, the current scan one step ahead, and the current scan where it will be
+# when the robot gets there.
 
 # %%
 student = make_planner("memory", profile=moving)
@@ -155,7 +160,7 @@ for k in range(3):
     student.observe(shown.actions[k], None)
 fig, axes = plt.subplots(1, 4, figsize=(11, 2.9))
 plotting.show_depth(image, axes[0], "depth image, time 2")
-for ax, g, title in zip(axes[1:], grid, ("its map", "scan, one step ahead", "scan, two steps ahead"),
+for ax, g, title in zip(axes[1:], grid, ("its map", "scan, one step ahead", "scan, when it gets there"),
                         strict=True):
     ax.imshow(g, cmap="Greys", vmin=0, vmax=1)
     ax.set_title(title, fontsize=9)

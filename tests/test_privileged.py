@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import torch
 
+from husky_course.course import ceiling
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.models.rnn import RNNLookahead
 from husky_course.models.safety import JointModel, SurvivalNet
@@ -75,10 +76,17 @@ def _all_planner_classes() -> set[type]:
     return found
 
 
-def test_only_the_oracle_is_privileged():
-    assert {base, classic, learned, oracle}  # every planner module is imported
-    privileged = {c.__name__ for c in _all_planner_classes() if c.privileged}
-    assert privileged == {"OraclePlanner"}
+def test_only_the_oracle_and_the_analysis_ceilings_are_privileged():
+    """Among planners, only the oracle; beside it, the course's ceiling planners (analysis tools in
+    ``course/ceiling.py``, never a learner or a planner the book ranks as one). Every module that
+    defines planners is imported here, so the answer does not depend on which tests ran first."""
+    assert {base, classic, learned, oracle, ceiling}
+    privileged = {c for c in _all_planner_classes() if c.privileged}
+    in_planners = {c.__name__ for c in privileged if c.__module__.startswith("husky_course.planners")}
+    assert in_planners == {"OraclePlanner"}
+    analysis = {c.__name__ for c in privileged} - in_planners
+    assert analysis == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SnapshotPlanner"}
+    assert all(c.__module__ == ceiling.__name__ for c in privileged if c.__name__ in analysis)
 
 
 @pytest.mark.parametrize("name", ["random", "heuristic", "lookahead", "rnn", "distilled"])

@@ -1,0 +1,91 @@
+"""Experiment: how much of the moving-course student's shortfall is its motion estimate?
+
+Run: ``python benchmarks/exp_moving_student.py [--profile quick] [--eval-worlds 200]``.
+
+Trains, in a separate artifact store (``--store``, default ``/tmp/husky-exp-moving``), the moving-course
+memory student by the same DAgger recipe, but with a privileged motion estimate: every point of the
+current scan gets the true lateral speed of the cylinder it lies on (0 for walls and standing
+cylinders) instead of :func:`husky_course.planners.motion.lateral_velocities`. Everything else is
+the course's student. Evaluates it and the course's student (which must be trained already) on the
+tuning set (evaluation set 1) and prints both success rates: the gap is what a perfect motion
+estimate would buy this network; the rest of the distance to the oracle is learning.
+
+The privileged estimate is wired in by patching the planner module for this process only (the
+episode's world and time are recorded as the simulator loads worlds and the planner observes
+steps), so evaluation runs in one process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+import numpy as np
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", default="quick")
+    parser.add_argument("--eval-worlds", type=int, default=200)
+    parser.add_argument("--store", default="/tmp/husky-exp-moving")
+    args = parser.parse_args()
+    course_store = os.environ.get("HUSKY_ARTIFACTS")
+
+    from husky_course.config import get_profile, with_world
+    from husky_course.evaluation.episodes import evaluate
+    from husky_course.planners.registry import make_planner
+
+    profile = with_world(get_profile(args.profile), "moving")
+    ours = evaluate(make_planner("memory", profile=profile), args.eval_worlds, 1, config=profile.sim,
+                    progress=False, workers=2)
+
+    import husky_course.planners.memory as memory_module
+    from husky_course.data import store
+    from husky_course.sim.fast import FastSimulator
+
+    state: dict = {}
+    planner = memory_module.MemoryPlanner
+    load, reset, observe = FastSimulator.load, planner.reset, planner.observe
+
+    def traced_load(self, world):  # type: ignore[no-untyped-def]
+        state["world"] = load(self, world)
+        return state["world"]
+
+    def traced_reset(self, start):  # type: ignore[no-untyped-def]
+        reset(self, start)
+        state["t"], state["pose"] = 0, np.array(state["world"].start, float)
+
+    def traced_observe(self, action, obs):  # type: ignore[no-untyped-def]
+        observe(self, action, obs)
+        state["t"] += 1
+        state["pose"] = state["pose"] + np.r_[self._library.local_paths[action, -1][:2], 0.0]
+
+    def true_velocities(previous, now, max_step):  # type: ignore[no-untyped-def]
+        world, pose = state["world"], state["pose"]
+        obs = world.obstacles_at(float(state["t"]))
+        at = now + pose[:2]
+        gap = np.hypot(at[:, None, 0] - obs[None, :, 0], at[:, None, 1] - obs[None, :, 1]) - obs[None, :, 2]
+        nearest = np.argmin(gap, 1)
+        on = gap[np.arange(len(nearest)), nearest] < 0.05
+        return np.where(on, world.speeds[nearest], 0.0)
+
+    FastSimulator.load = traced_load
+    planner.reset = traced_reset
+    planner.observe = traced_observe
+    memory_module.lateral_velocities = true_velocities
+    os.environ[store.ARTIFACTS_ENV] = args.store
+    from husky_course.imitation.dagger import get_memory
+
+    student = get_memory(profile, progress=False)
+    theirs = evaluate(make_planner("memory", profile=profile), args.eval_worlds, 1, config=profile.sim,
+                      progress=False)
+    if course_store is not None:
+        os.environ[store.ARTIFACTS_ENV] = course_store
+    print(f"rounds (privileged motion): {[round(r['success_in_its_worlds'], 3) for r in student.rounds]}")
+    for name, r in (("course's student (estimated motion)", ours), ("same recipe, true motion", theirs)):
+        lo, hi = r.success_ci95
+        print(f"  {name:38s} success {r.success_rate:.3f} [{lo:.3f}, {hi:.3f}]")
+
+
+if __name__ == "__main__":
+    main()
