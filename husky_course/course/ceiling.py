@@ -29,103 +29,11 @@ from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 
 
-class SeenObstaclesPlanner(Planner):
-    """Exact replanning over the obstacles seen now (or ever): perfect perception, no more."""
+class _Ceiling(Planner):
+    """What the ceiling planners share: privileged, replanning at every step with the oracle's exact
+    lattice search (its cap and quantum), counting steps; subclasses choose which obstacles it sees."""
 
-    privileged = True  # it reads the true geometry of what it has seen: an analysis tool only
-
-    def __init__(self, memory: bool, oracle: OracleConfig | None = None) -> None:
-        super().__init__()
-        self.memory = bool(memory)
-        self.name = "seen so far (perfect perception)" if memory else "seen now (perfect perception)"
-        self.oracle = oracle or OracleConfig()
-        self._eyes: FastSimulator | None = None
-        self._seen: set[int] = set()
-        self._remaining = 0
-
-    def reset(self, start: EpisodeStart) -> None:
-        super().reset(start)
-        if start.sim is None or start.sim.world is None:
-            raise RuntimeError("SeenObstaclesPlanner is privileged: run it with run_episode")
-        self._eyes = FastSimulator(start.sim.config)
-        self._eyes.load(start.sim.world)
-        self._seen, self._remaining = set(), start.max_primitives
-
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        assert self._eyes is not None and self._eyes.world is not None and pose is not None
-        world = self._eyes.world
-        now = set(self._eyes.visible_obstacles(pose).tolist())
-        self._seen = (self._seen | now) if self.memory else now
-        obstacles = world.obstacles[sorted(self._seen)] if self._seen else np.empty((0, 3))
-        check = disc_check(obstacles, world.wall_y, world.config.robot_radius, self.oracle.cap)
-        lattice = expand_with(check, self._eyes.library, np.asarray(pose, float), max(self._remaining, 1))
-        lateral = np.abs(self._eyes.library.offsets)
-        ranking = rank_plans(lattice, lateral, self.oracle.cap, self.oracle.quantum)
-        keys = ranking.keys[0][0]
-        self.last_scores = -(keys - keys.max()) / 1e6
-        return int(ranking.choice[0][0])
-
-    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
-        self._remaining -= 1
-
-
-class SeenMotionPlanner(Planner):
-    """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
-
-    Privileged, an analysis tool: the ceiling of a camera-based planner on the moving course. Every
-    cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
-    from then on; the others are unknown. Against the oracle, it measures what the camera never
-    shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
-    """
-
-    name = "seen so far, with motion (perfect perception)"
-    privileged = True
-
-    def __init__(self, oracle: OracleConfig | None = None) -> None:
-        super().__init__()
-        self.oracle = oracle or OracleConfig()
-        self._eyes: FastSimulator | None = None
-        self._seen: set[int] = set()
-        self._time = self._remaining = 0
-
-    def reset(self, start: EpisodeStart) -> None:
-        super().reset(start)
-        if start.sim is None or start.sim.world is None:
-            raise RuntimeError("SeenMotionPlanner is privileged: run it with run_episode")
-        self._eyes = FastSimulator(start.sim.config)
-        self._eyes.load(start.sim.world)
-        self._seen, self._time, self._remaining = set(), 0, start.max_primitives
-
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        assert self._eyes is not None and self._eyes.world is not None and pose is not None
-        world = self._eyes.world
-        self._seen |= set(self._eyes.visible_obstacles(pose, float(self._time)).tolist())
-        known = np.array(sorted(self._seen), int)
-        speeds = None if world.speeds is None else world.speeds[known]
-        sub = replace(world, obstacles=world.obstacles[known], speeds=speeds)
-        library, cap = self._eyes.library, self.oracle.cap
-        lattice = expand(sub, library, np.asarray(pose, float), max(self._remaining, 1), cap, self._time)
-        ranking = rank_plans(lattice, np.abs(library.offsets), cap, self.oracle.quantum)
-        keys = ranking.keys[0][0]
-        self.last_scores = -(keys - keys.max()) / 1e6
-        return int(ranking.choice[0][0])
-
-    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
-        self._time += 1
-        self._remaining -= 1
-
-
-class SnapshotPlanner(Planner):
-    """Exact replanning over every cylinder where it stands *now*, as if it stood still (chapter 10).
-
-    Privileged like :class:`SeenObstaclesPlanner`, an analysis tool: at step ``k`` it knows every
-    cylinder's true position at time ``k`` (perfect perception of the present, unlimited field of
-    view) but not where a cylinder is going. Against the space-time oracle, which knows both, it
-    measures what knowing the motion is worth.
-    """
-
-    name = "snapshot (every position now, no motion)"
-    privileged = True
+    privileged = True  # they read the true geometry of the world: analysis tools only
 
     def __init__(self, oracle: OracleConfig | None = None) -> None:
         super().__init__()
@@ -136,20 +44,101 @@ class SnapshotPlanner(Planner):
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
         if start.sim is None or start.sim.world is None:
-            raise RuntimeError("SnapshotPlanner is privileged: run it with run_episode")
+            raise RuntimeError(f"{type(self).__name__} is privileged: run it with run_episode")
         self._sim, self._time, self._remaining = start.sim, 0, start.max_primitives
 
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        assert self._sim is not None and self._sim.world is not None and pose is not None
-        world, library = self._sim.world, self._sim.library
-        now = world.obstacles_at(float(self._time))  # a frozen copy: positions at this step, no speeds
-        check = disc_check(now, world.wall_y, world.config.robot_radius, self.oracle.cap)
-        lattice = expand_with(check, library, np.asarray(pose, float), max(self._remaining, 1))
-        ranking = rank_plans(lattice, np.abs(library.offsets), self.oracle.cap, self.oracle.quantum)
+    def _choose(self, lattice) -> int:
+        """The oracle's choice on ``lattice`` (its best plan's first primitive); scores kept."""
+        assert self._sim is not None
+        ranking = rank_plans(lattice, np.abs(self._sim.library.offsets), self.oracle.cap, self.oracle.quantum)
         keys = ranking.keys[0][0]
         self.last_scores = -(keys - keys.max()) / 1e6
         return int(ranking.choice[0][0])
 
+    def _choose_frozen(self, check, pose: np.ndarray) -> int:
+        """:meth:`_choose` on the lattice of the remaining steps under a frozen (time-free) ``check``."""
+        assert self._sim is not None
+        lattice = expand_with(check, self._sim.library, np.asarray(pose, float), max(self._remaining, 1))
+        return self._choose(lattice)
+
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
         self._time += 1
         self._remaining -= 1
+
+
+class SeenObstaclesPlanner(_Ceiling):
+    """Exact replanning over the obstacles seen now (or ever): perfect perception, no more."""
+
+    def __init__(self, memory: bool, oracle: OracleConfig | None = None) -> None:
+        super().__init__(oracle)
+        self.memory = bool(memory)
+        self.name = "seen so far (perfect perception)" if memory else "seen now (perfect perception)"
+        self._eyes: FastSimulator | None = None
+        self._seen: set[int] = set()
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self._eyes = FastSimulator(start.sim.config)
+        self._eyes.load(start.sim.world)
+        self._seen = set()
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._eyes is not None and self._eyes.world is not None and pose is not None
+        world = self._eyes.world
+        now = set(self._eyes.visible_obstacles(pose).tolist())
+        self._seen = (self._seen | now) if self.memory else now
+        obstacles = world.obstacles[sorted(self._seen)] if self._seen else np.empty((0, 3))
+        check = disc_check(obstacles, world.wall_y, world.config.robot_radius, self.oracle.cap)
+        return self._choose_frozen(check, pose)
+
+
+class SeenMotionPlanner(_Ceiling):
+    """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
+
+    Privileged, an analysis tool: the ceiling of a camera-based planner on the moving course. Every
+    cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
+    from then on; the others are unknown. Against the oracle, it measures what the camera never
+    shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
+    """
+
+    name = "seen so far, with motion (perfect perception)"
+
+    def __init__(self, oracle: OracleConfig | None = None) -> None:
+        super().__init__(oracle)
+        self._eyes: FastSimulator | None = None
+        self._seen: set[int] = set()
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self._eyes = FastSimulator(start.sim.config)
+        self._eyes.load(start.sim.world)
+        self._seen = set()
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._eyes is not None and self._eyes.world is not None and pose is not None
+        world = self._eyes.world
+        self._seen |= set(self._eyes.visible_obstacles(pose, float(self._time)).tolist())
+        known = np.array(sorted(self._seen), int)
+        speeds = None if world.speeds is None else world.speeds[known]
+        sub = replace(world, obstacles=world.obstacles[known], speeds=speeds)
+        steps, pose = max(self._remaining, 1), np.asarray(pose, float)
+        return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, self._time))
+
+
+class SnapshotPlanner(_Ceiling):
+    """Exact replanning over every cylinder where it stands *now*, as if it stood still (chapter 10).
+
+    Privileged like :class:`SeenObstaclesPlanner`, an analysis tool: at step ``k`` it knows every
+    cylinder's true position at time ``k`` (perfect perception of the present, unlimited field of
+    view) but not where a cylinder is going. Against the space-time oracle, which knows both, it
+    measures what knowing the motion is worth.
+    """
+
+    name = "snapshot (every position now, no motion)"
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._sim is not None and self._sim.world is not None and pose is not None
+        world = self._sim.world
+        now = world.obstacles_at(float(self._time))  # a frozen copy: positions at this step, no speeds
+        check = disc_check(now, world.wall_y, world.config.robot_radius, self.oracle.cap)
+        return self._choose_frozen(check, pose)
