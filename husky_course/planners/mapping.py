@@ -50,24 +50,26 @@ class ClearanceGrid:
         points = np.asarray(points, float).reshape(-1, 3)
         k = int(np.ceil((reach + (points[:, 2].max() if len(points) else 0.0)) / resolution))
         off = np.arange(-k, k + 1)
-        dx, dy = np.meshgrid(off, off, indexing="ij")
-        stamp_d = np.hypot(dx, dy).ravel() * resolution
-        keep = stamp_d < k * resolution
-        sdx, sdy, sd = dx.ravel()[keep], dy.ravel()[keep], stamp_d[keep]
+        disc = np.hypot(off[:, None], off[None, :]) * resolution < k * resolution  # the stamp
         ix = np.rint((points[:, 0] - x0) / resolution).astype(int)
         iy = np.rint((points[:, 1] - self.y0) / resolution).astype(int)
         inside = (ix > -k) & (ix < nx + k) & (iy > -k) & (iy < ny + k)
-        if inside.any():
-            cx = (ix[inside, None] + sdx[None]).ravel()
-            cy = (iy[inside, None] + sdy[None]).ravel()
-            # distance from the cell centre to the point itself (not to its own cell's centre)
-            px = np.repeat(points[inside, 0], len(sd))
-            py = np.repeat(points[inside, 1], len(sd))
-            pr = np.repeat(points[inside, 2], len(sd))
-            ok = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny)
-            cx, cy, px, py, pr = cx[ok], cy[ok], px[ok], py[ok], pr[ok]
-            d = np.hypot(x0 + cx * resolution - px, self.y0 + cy * resolution - py) - pr
-            np.minimum.at(grid, (cx, cy), np.minimum(d, reach))
+        points, ix, iy = points[inside], ix[inside], iy[inside]
+        if len(points):
+            # each point's stamp as a (2k+1)^2 block: distance from the cell centres to the point itself
+            # (not to its own cell's centre), minus its radius; cells off the disc stay at ``reach``
+            ax = x0 + (ix[:, None] + off) * resolution - points[:, :1]
+            ay = self.y0 + (iy[:, None] + off) * resolution - points[:, 1:2]
+            d = np.hypot(ax[:, :, None], ay[:, None, :]) - points[:, 2, None, None]
+            np.minimum(d, reach, out=d)
+            d[:, ~disc] = reach
+            for j in range(len(points)):  # the minimum over overlapping blocks, clipped to the grid
+                a0, a1 = max(0, ix[j] - k), min(nx, ix[j] + k + 1)
+                b0, b1 = max(0, iy[j] - k), min(ny, iy[j] + k + 1)
+                if a0 < a1 and b0 < b1:
+                    cells = grid[a0:a1, b0:b1]
+                    np.minimum(cells, d[j, a0 - ix[j] + k : a1 - ix[j] + k, b0 - iy[j] + k : b1 - iy[j] + k],
+                               out=cells)
         self.grid = grid
 
     def __call__(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
