@@ -83,6 +83,24 @@ for ax, t in zip(axes, (0, 2, 4), strict=True):
 plt.show()
 
 # %% [markdown]
+# The motion model, checked on this world at 100 times per step: a moving cylinder travels at its
+# constant speed, reflects off a side wall, and is a closed-form function of the seed and the time.
+
+# %%
+# NBVAL_CHECK_OUTPUT
+times = np.linspace(0, moving.sim.max_primitives, 100 * moving.sim.max_primitives + 1)
+at = world.obstacles_at(times)  # (times, cylinders, 3)
+radii, walkers = world.obstacles[:, 2], world.moving
+standing = np.setdiff1d(np.arange(len(radii)), walkers)
+speed = np.abs(np.diff(at[:, walkers, 1], axis=0)) / np.diff(times)[:, None]
+print(f"{len(walkers)} of {len(radii)} cylinders move")
+print("every cylinder stays between the walls:", bool((np.abs(at[..., 1]) <= world.wall_y - radii + 1e-9).all()))
+print("the others never move:", bool((at[:, standing] == world.obstacles[standing]).all()))
+print("no mover ever exceeds its speed:", bool((speed <= np.abs(world.speeds[walkers]) + 1e-9).all()))
+print("the same seed gives the same positions:",
+      bool(np.array_equal(sim.load(world_seed).obstacles_at(times), at)))
+
+# %% [markdown]
 # ## Calibration: the random policy on both courses
 #
 # The static course was calibrated so that the random policy survives about as many primitives per
