@@ -46,6 +46,34 @@ def test_shapes_and_parameter_counts():
     assert probs.shape == (4, 25) and bool(((probs >= 0) & (probs <= 1)).all())
 
 
+def test_encoder_fast_path_equals_the_layers():
+    """Encoder's fused BatchNorm + first convolution: same outputs, gradients and running statistics
+    as running ``features`` layer by layer (the paper's definition), in training and in evaluation."""
+    torch.manual_seed(0)
+    fast, ref = EncoderDecoder().encoder, EncoderDecoder().encoder
+    ref.load_state_dict(fast.state_dict())
+    with torch.no_grad():  # a BatchNorm away from its initial identity, so its scale and shift matter
+        for e in (fast, ref):
+            e.features[0].weight.fill_(1.7)
+            e.features[0].bias.fill_(-0.3)
+    x = torch.rand(6, 1, 50, 50) * 0.8 + 0.1
+    for step in range(2):  # two training steps: running statistics accumulate identically
+        fast.train(), ref.train()
+        out_fast = fast.unchecked(x + 0.05 * step)
+        out_ref = ref.fc(ref.features(x + 0.05 * step))
+        torch.testing.assert_close(out_fast, out_ref, rtol=1e-5, atol=1e-5)
+        (out_fast**2).sum().backward()
+        (out_ref**2).sum().backward()
+        for (name, a), (_, b) in zip(fast.named_parameters(), ref.named_parameters(), strict=True):
+            torch.testing.assert_close(a.grad, b.grad, rtol=1e-4, atol=1e-5, msg=lambda m, n=name: f"{n} {m}")
+        for (name, a), (_, b) in zip(fast.named_buffers(), ref.named_buffers(), strict=True):
+            torch.testing.assert_close(a, b, msg=lambda m, n=name: f"{n}: {m}")
+    assert int(fast.features[0].num_batches_tracked) == 2
+    fast.eval(), ref.eval()
+    with torch.no_grad():
+        torch.testing.assert_close(fast(x[:, 0]), ref.fc(ref.features(x)), rtol=1e-5, atol=1e-5)
+
+
 def test_primitive_encoding_and_bad_inputs():
     torch.testing.assert_close(
         encode_primitive(torch.tensor([0, 12, 24]), 25), torch.tensor([[-1.0], [0.0], [1.0]])

@@ -57,7 +57,34 @@ class Encoder(nn.Module):
 
     def unchecked(self, x: Tensor) -> Tensor:
         """The encoder without input checks, for ``(B, 1, size, size)`` float input (experiments only)."""
-        return self.fc(self.features(x.contiguous(memory_format=torch.channels_last)))
+        return self.fc(self.features[2:](self._norm_conv(x)))
+
+    def _norm_conv(self, x: Tensor) -> Tensor:
+        """``features[1](features[0](x))``, the BatchNorm and the first convolution, as one product.
+
+        The same function and the same gradients as the two layers, 1.7x faster to train on 2 CPU
+        cores (oneDNN's backward of a 10x10 convolution with one input channel is slow). The image
+        is data, so its normalised version ``xhat`` needs no gradient, and, with ``g, b`` the
+        BatchNorm's scale and shift and ``W, c`` the convolution's weights and bias,
+        ``conv(g xhat + b) = g conv_W(xhat) + (b sum(W) + c)``: the first term is one matrix product
+        of ``xhat``'s 10x10 patches (strided views of it) with ``W``. ``F.batch_norm`` computes
+        ``xhat`` and updates the running statistics exactly as the BatchNorm layer does. Checked
+        against the layers in ``tests/test_models.py``.
+        """
+        bn, conv = self.features[0], self.features[1]
+        with torch.no_grad():
+            xhat = F.batch_norm(
+                x, bn.running_mean, bn.running_var, None, None, bn.training, float(bn.momentum), bn.eps
+            ).contiguous()
+        if bn.training and bn.num_batches_tracked is not None:
+            bn.num_batches_tracked.add_(1)
+        n, _, h, w = xhat.shape
+        k, s = conv.kernel_size[0], conv.stride[0]
+        ho, wo, out = _conv_out(h, k, s), _conv_out(w, k, s), conv.out_channels
+        patches = xhat.as_strided((n, ho, wo, k, k), (h * w, s * w, s, w, 1)).reshape(n * ho * wo, k * k)
+        weight = conv.weight.reshape(out, k * k)
+        y = (patches @ weight.t()) * bn.weight + (bn.bias * weight.sum(1) + conv.bias)
+        return y.view(n, ho, wo, out).permute(0, 3, 1, 2)  # channels-last memory, as oneDNN likes it
 
 
 class Decoder(nn.Module):
