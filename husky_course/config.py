@@ -197,14 +197,14 @@ class TrainingPlan:
     45-min budget on 2 cores, not convergence (chapter 3 prints how its run ended).
     """
 
-    encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=8, patience=3))
+    encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=7, patience=3))
     reward_net: TrainConfig = field(  # the paper's lr and batch size (Section 4.2)
         default_factory=lambda: TrainConfig(lr=1e-3, batch_size=16, epochs=30, patience=5)
     )
-    joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=6, patience=3))  # safety nets too
+    joint: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=5, patience=3))  # safety nets too
     probe: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=30, patience=4))
-    rnn: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=6, patience=3))
-    distilled: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=8, patience=3))
+    rnn: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=5, patience=3))
+    distilled: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=6, patience=3))
 
 
 @dataclass(frozen=True)
@@ -231,7 +231,7 @@ class MemoryConfig:
     map_half_width: float = 3.2  #: ... and y in [-map_half_width, map_half_width]
     label_horizon: int = 5  #: survival labels over this many steps (the simulator's lattice search)
     rounds: int = 3  #: round 0 follows the teacher, later rounds the student (DAgger)
-    worlds_per_round: int = 600  #: sized so that `make book`'s budget holds (see the closing notes)
+    worlds_per_round: int = 450  #: sized so that `make book`'s budget holds (see the closing notes)
     collection_seed: int = 2
     train: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=10, patience=3))
 

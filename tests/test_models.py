@@ -69,8 +69,9 @@ def test_encoder_fast_path_equals_the_layers():
         for (name, a), (_, b) in zip(fast.named_buffers(), ref.named_buffers(), strict=True):
             torch.testing.assert_close(a, b, msg=lambda m, n=name: f"{n}: {m}")
     assert int(fast.features[0].num_batches_tracked) == 2
-    fast.eval(), ref.eval()
+    fast.eval(), ref.eval()  # evaluation runs the layers; the fused path agrees with running statistics too
     with torch.no_grad():
+        torch.testing.assert_close(fast._norm_conv(x), ref.features[:2](x), rtol=1e-5, atol=1e-5)
         torch.testing.assert_close(fast(x[:, 0]), ref.fc(ref.features(x)), rtol=1e-5, atol=1e-5)
 
 
