@@ -26,10 +26,7 @@ install: $(VENV)/.installed
 
 data: install  ## build the dataset and train the models the chapters need, once, with progress bars
 	$(PY) -m husky_course collect --profile $(PROFILE) --workers 2 > /dev/null
-	$(PY) -m husky_course train encoder_decoder --profile $(PROFILE) > /dev/null
-	@# chapter 4's diagnosis is many small runs that keep one core busy: built beside the rest
-	$(PY) -m husky_course train diagnosis --profile $(PROFILE) --no-progress > /dev/null & diag=$$!; \
-		$(PY) -m husky_course train all --profile $(PROFILE) > /dev/null; wait $$diag
+	$(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book

@@ -141,19 +141,18 @@ def _world_option(p: argparse.ArgumentParser) -> None:
     )
 
 
-#: what ``train`` can build, in the order ``train all`` builds them: the chapters' order, except chapter 4's
-#: diagnosis last (`make data` builds it in a second process beside the others; ``all`` then loads it)
+#: what ``train`` can build, in the order the chapters need them
 TRAINABLE = (
     "encoder_decoder",
     "reward_net",
     "safety_image",
     "safety_prim",
     "joint",
+    "diagnosis",
     "rnn",
     "distilled",
     "memory",
     "certificate",
-    "diagnosis",
 )
 
 

@@ -34,11 +34,12 @@ from ..data.io import atomic_write_bytes
 from ..data.labels import nearest_obstacle_distance, primitive_outcomes
 from ..data.splits import reward_set
 from ..data.store import dataset_id, get_dataset, model_dir
+from ..engines import map_tasks
 from ..evaluation.metrics import Classification, classification, image_errors, roc_auc
 from ..models.base import DEFAULT_DIMS
 from ..models.paper import Encoder, LatentRewardNet
 from ..models.safety import Probe
-from ..progress import announce_build, tqdm
+from ..progress import announce_build
 from ..sim.fast import FastSimulator
 from ..training.builders import get_encoder_decoder
 from ..training.datasets import images_tensor
@@ -57,6 +58,8 @@ class RewardVariant:
     depth_in_metres: bool = False  #: images enter the frozen encoder in metres (0-5), not [0, 1]
     random_encoder: bool = False  #: the latent comes from an untrained encoder
 
+
+WORKERS = 2  #: processes :func:`get_diagnosis` trains in (every result is the same for any number)
 
 VARIANTS = (
     RewardVariant("faithful (ours)"),
@@ -121,6 +124,52 @@ class VariantResult:
         }
 
 
+def variant_latents(
+    variant: RewardVariant,
+    encoder: Encoder,
+    images: Tensor,
+    camera: CameraConfig | None = None,
+    seed: int = 0,
+) -> np.ndarray:
+    """The latents ``(N, latent)`` the reward net of ``variant`` (trained with ``seed``) is trained on."""
+    if variant.random_encoder:
+        torch.manual_seed(seed + 1)
+        encoder = Encoder(replace(DEFAULT_DIMS, image_size=encoder.size, latent=encoder.fc.out_features))
+        encoder.eval()
+    if variant.depth_in_metres:  # bypasses the [0, 1] input check on purpose: that is the slip
+        far = (camera or CameraConfig()).far  # normalised depth x far: metres, give or take `near`
+        encoder.eval()
+        with torch.no_grad():
+            return torch.cat(
+                [
+                    encoder.unchecked(images[i : i + 2048].float().unsqueeze(1) * far)
+                    for i in range(0, len(images), 2048)
+                ]
+            ).numpy()
+    return encode(encoder, images)
+
+
+def _fit_variant(task: tuple) -> tuple[History, np.ndarray]:
+    """One variant's reward net trained on ``(z, label)`` rows: its history and validation p(collision)."""
+    variant, z_train, y_train, z_val, y_val, cfg = task
+    torch.manual_seed(cfg.seed)
+    net = _VariantNet(variant)
+
+    def data(z: np.ndarray, y: np.ndarray) -> dict[str, Tensor]:
+        return {"z": torch.from_numpy(z), "label": torch.from_numpy(y.astype(np.float32))}
+
+    hist = fit(net, data(z_train, y_train), data(z_val, y_val), cfg, progress=False, desc=variant.name)
+    return hist, net.p_collision(torch.from_numpy(z_val))
+
+
+def _variant_task(
+    variant: RewardVariant, ds: Dataset, train_idx: np.ndarray, val_idx: np.ndarray, z: np.ndarray,
+    cfg: TrainConfig,
+) -> tuple:
+    labels = shifted_labels(ds) if variant.label_shift else ds.labels
+    return variant, z[train_idx], labels[train_idx], z[val_idx], labels[val_idx], cfg
+
+
 def run_reward_variant(
     variant: RewardVariant,
     ds: Dataset,
@@ -132,31 +181,8 @@ def run_reward_variant(
     camera: CameraConfig | None = None,
 ) -> VariantResult:
     """Train the paper's reward net under ``variant``; score it against the *true* labels."""
-    if variant.random_encoder:
-        torch.manual_seed(cfg.seed + 1)
-        encoder = Encoder(replace(DEFAULT_DIMS, image_size=encoder.size, latent=encoder.fc.out_features))
-        encoder.eval()
-    if variant.depth_in_metres:  # bypasses the [0, 1] input check on purpose: that is the slip
-        far = (camera or CameraConfig()).far  # normalised depth x far: metres, give or take `near`
-        encoder.eval()
-        with torch.no_grad():
-            z = torch.cat(
-                [
-                    encoder.unchecked(images[i : i + 2048].float().unsqueeze(1) * far)
-                    for i in range(0, len(images), 2048)
-                ]
-            ).numpy()
-    else:
-        z = encode(encoder, images)
-    labels = shifted_labels(ds) if variant.label_shift else ds.labels
-    torch.manual_seed(cfg.seed)
-    net = _VariantNet(variant)
-
-    def data(idx: np.ndarray) -> dict[str, Tensor]:
-        return {"z": torch.from_numpy(z[idx]), "label": torch.from_numpy(labels[idx].astype(np.float32))}
-
-    hist = fit(net, data(train_idx), data(val_idx), cfg, progress=False, desc=variant.name)
-    p = net.p_collision(torch.from_numpy(z[val_idx]))
+    z = variant_latents(variant, encoder, images, camera, cfg.seed)
+    hist, p = _fit_variant(_variant_task(variant, ds, train_idx, val_idx, z, cfg))
     return VariantResult(variant, hist, classification(ds.labels[val_idx], p))
 
 
@@ -182,6 +208,12 @@ def probe_r2(
     with torch.no_grad():
         pred = probe(torch.from_numpy((x_val - mu) / sd)).numpy() * ys + ym
     return float(1.0 - ((pred - y_val) ** 2).mean() / y_val.var())
+
+
+def _diagnosis_task(task: tuple) -> object:
+    """A probe (``("probe", args)``: its R^2) or a variant (``("variant", args)``: history, p)."""
+    kind, args = task
+    return probe_r2(*args) if kind == "probe" else _fit_variant(args)
 
 
 def image_only_ceiling(ds: Dataset, idx: np.ndarray, config: SimConfig | None = None) -> dict[str, float]:
@@ -288,27 +320,29 @@ def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
     tr, va = rs.train, rs.val
     images = images_tensor(ds)
     encoder = ed.model.encoder  # type: ignore[union-attr]
-    bar = tqdm(total=len(VARIANTS) + 3, desc="diagnosis", disable=not progress)
     latents = encode(encoder, images)
     dist = nearest_obstacle_distance(ds, config=profile.sim)
     torch.manual_seed(1)
     random_latents = encode(Encoder(profile.dims).eval(), images)
     pixels, latent = profile.dims.image_size**2, profile.dims.latent
-    probes = {}
-    for name, x in (
-        (f"raw image ({pixels:,} pixels)", ds.images),
-        (f"frozen latent ({latent})", latents),
-        (f"untrained encoder's latent ({latent})", random_latents),
-    ):
-        probes[name] = probe_r2(x[tr], dist[tr], x[va], dist[va], profile.train.probe)
-        bar.update()
-    variants = []
-    for v in VARIANTS:
-        variants.append(
-            run_reward_variant(v, ds, tr, va, encoder, profile.train.reward_net, images, profile.sim.camera)
-        )
-        bar.update()
-    bar.close()
+    probe_inputs = {
+        f"raw image ({pixels:,} pixels)": ds.images,
+        f"frozen latent ({latent})": latents,
+        f"untrained encoder's latent ({latent})": random_latents,
+    }
+    cfg = profile.train
+    tasks = [("probe", (x[tr], dist[tr], x[va], dist[va], cfg.probe)) for x in probe_inputs.values()]
+    for v in VARIANTS:  # the latents here (two threads), the small trainings in the workers
+        z = variant_latents(v, encoder, images, profile.sim.camera, cfg.reward_net.seed)
+        tasks.append(("variant", _variant_task(v, ds, tr, va, z, cfg.reward_net)))
+    # many small runs, each on one torch thread whatever the number of workers: the same numbers
+    done = map_tasks(_diagnosis_task, tasks, engine="local", workers=WORKERS, desc="diagnosis",
+                     progress=progress)
+    probes = dict(zip(probe_inputs, done[: len(probe_inputs)], strict=True))
+    variants = [
+        VariantResult(v, hist, classification(ds.labels[va], p))
+        for v, (hist, p) in zip(VARIANTS, done[len(probe_inputs) :], strict=True)
+    ]
     result = Diagnosis(variants, probes)
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(path, json.dumps(result.to_dict(), indent=1).encode())
