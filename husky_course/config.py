@@ -190,12 +190,8 @@ def model_dims(sim: SimConfig | None = None, model: ModelConfig | None = None) -
 
 @dataclass(frozen=True)
 class TrainingPlan:
-    """The training runs of the learning chapters, sized per profile.
-
-    Defaults are the full profile's. Its convolutional models still improve slowly at 20 epochs
-    (encoder/decoder validation BCE 0.409 after 6, 0.394 after 20): their caps are `make book`'s
-    45-min budget on 2 cores, not convergence (chapter 3 prints how its run ended).
-    """
+    """The training runs of the learning chapters, sized per profile (defaults: the full profile's; its
+    epoch caps are `make book`'s budget on 2 cores, not convergence: chapter 3 prints how a run ended)."""
 
     encoder_decoder: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=7, patience=3))
     reward_net: TrainConfig = field(  # the paper's lr and batch size (Section 4.2)
