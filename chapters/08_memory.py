@@ -29,8 +29,9 @@ from IPython.display import HTML, Markdown, display
 from husky_course.config import get_profile
 from husky_course.course.ceiling import SeenObstaclesPlanner
 from husky_course.evaluation.analysis import collision_cause
-from husky_course.evaluation.episodes import eval_world_seeds, evaluate
+from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.evaluation.statistics import clopper_pearson
+from husky_course.evaluation.stored import evaluate_stored
 from husky_course.imitation.dagger import get_memory
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
@@ -55,7 +56,7 @@ print(f"profile {profile.name}: {N} held-out worlds of evaluation set {REPORT}")
 
 # %%
 ceiling = {
-    name: evaluate(p, N, REPORT, sim=sim, progress=False, workers=W) for name, p in [
+    name: evaluate_stored(p, N, REPORT, profile, progress=False, workers=W) for name, p in [
         ("seen now (perfect perception)", SeenObstaclesPlanner(memory=False)),
         ("seen so far (perfect perception)", SeenObstaclesPlanner(memory=True)),
         ("oracle (every obstacle)", make_planner("oracle"))]
@@ -135,7 +136,10 @@ display(Markdown(markdown_table([
 # ## Every planner of the course on the same held-out worlds
 #
 # From the paper's Algorithm 1 to the oracle, on the reporting set. The learned look-ahead planners
-# use the same `look_ahead` as in chapter 7 (`LOOK_AHEAD`, printed below).
+# use the same `look_ahead` as in chapter 7 (`LOOK_AHEAD`, printed below). `evaluate_stored` keeps
+# every run in the artifact store under a key of the planner's whole state, the worlds and the
+# library's code, so a planner chapter 7 already ran on these worlds is read back, not run again
+# (`husky_course/evaluation/stored.py`).
 
 # %%
 LOOK_AHEAD = 2  # as in chapter 7
@@ -146,13 +150,13 @@ for name in names:
     if name in ("lookahead", "rnn", "distilled"):
         p = make_planner(name, profile=profile, look_ahead=LOOK_AHEAD, train=True)
     elif name == "memory":
-        p = memory_planner
+        p = make_planner("memory", profile=profile)  # afresh: the one above has run an episode
     elif name == "oracle":  # the same planner on the same worlds as in the ceiling table: reuse its run
         results[name] = ceiling["oracle (every obstacle)"]
         continue
     else:
         p = make_planner(name)
-    results[name] = evaluate(p, N, REPORT, sim=sim, progress=False, workers=W)
+    results[name] = evaluate_stored(p, N, REPORT, profile, progress=False, workers=W)
 rows = [{"planner": n, "success": r.success_rate,
          "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]",
          "collisions <= (95%)": r.collision_rate_upper95, "ms / decision": f"{r.ms_per_decision:.2f}"}

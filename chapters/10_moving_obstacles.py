@@ -34,7 +34,8 @@ from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.course.ceiling import SeenMotionPlanner, SnapshotPlanner
 from husky_course.data.calibration import mean_interval, video_lengths
 from husky_course.evaluation.analysis import obstacle_hit
-from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
+from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+from husky_course.evaluation.stored import evaluate_stored
 from husky_course.imitation.dagger import get_memory
 from husky_course.planners.base import episode_start
 from husky_course.planners.registry import make_planner
@@ -205,8 +206,8 @@ def build(name: str, course) -> object:
 names = ["random", "heuristic", "mapping", "distilled", "memory (static-trained)", "memory (moving-trained)",
          "snapshot", "seen, with motion", "oracle"]
 on_static = ["heuristic", "mapping", "distilled", "memory (static-trained)", "oracle"]
-res = {n: evaluate(build(n, moving), N, REPORT, sim=sim, progress=False, workers=W) for n in names}
-res_static = {n: evaluate(build(n, profile), N, REPORT, sim=sim_static, progress=False, workers=W)
+res = {n: evaluate_stored(build(n, moving), N, REPORT, moving, progress=False, workers=W) for n in names}
+res_static = {n: evaluate_stored(build(n, profile), N, REPORT, profile, progress=False, workers=W)
               for n in on_static}
 rows = [{"planner": n, "success (moving)": r.success_rate,
          "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]",

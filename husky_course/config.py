@@ -18,8 +18,7 @@ from dataclasses import asdict, dataclass, field, replace
 PROFILES = ("quick", "full")
 PROFILE_ENV = "HUSKY_PROFILE"
 
-#: World seeds at or above this value are reserved for evaluation worlds (planning chapters): data
-#: collection refuses to produce them, so a training world can never be an evaluation world.
+#: World seeds >= this are evaluation worlds: collection refuses them, so no training world is one.
 EVAL_SEED_BASE = 2**31
 
 
@@ -258,10 +257,12 @@ class GuaranteeConfig:
 
 @dataclass(frozen=True)
 class EvalPlan:
-    """How many held-out worlds the planning chapters evaluate on."""
+    """How many held-out worlds the planning chapters evaluate on (tables), and tune on (sweeps)."""
 
     worlds: int = 500
     seed: int = 0  #: which held-out set (see :func:`husky_course.evaluation.episodes.eval_world_seeds`)
+    tuning_worlds: int = 200  #: a sweep's worlds, of evaluation set ``tuning_seed``
+    tuning_seed: int = 1  #: the held-out set every sweep and choice is made on (never ``seed``)
     workers: int = 2  #: local processes the chapters evaluate with (every result but timing is the same)
 
 
@@ -296,7 +297,7 @@ def _profiles() -> dict[str, Profile]:
                 probe=TrainConfig(epochs=15, patience=3), rnn=TrainConfig(epochs=10, patience=3),
                 distilled=TrainConfig(epochs=10, patience=3),
             ),
-            EvalPlan(worlds=60), calibration=CalibrationConfig(videos=500),
+            EvalPlan(worlds=60, tuning_worlds=30), calibration=CalibrationConfig(videos=500),
             memory=MemoryConfig(worlds_per_round=300, train=TrainConfig(epochs=10, patience=3)),
             guarantee=GuaranteeConfig(worlds=400, finetune_worlds=150, heldout_worlds=1_000),
         ),
@@ -304,8 +305,7 @@ def _profiles() -> dict[str, Profile]:
     }
 
 
-#: Minutes to build each artifact on 2 CPU cores (clean ``train all`` quick, fresh-clone ``make book``
-#: full), rounded; only for the notice printed before a build (:func:`husky_course.progress.announce_build`).
+#: Minutes to build each artifact on 2 CPU cores, rounded: the estimate progress.announce_build prints
 BUILD_MINUTES: dict[str, dict[str, float]] = {
     "quick": {
         "dataset": 0.1, "encoder_decoder": 0.7, "reward_net": 0.1, "safety_image": 0.2, "safety_prim": 0.2,
