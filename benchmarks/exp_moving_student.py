@@ -5,7 +5,8 @@ Run: ``python benchmarks/exp_moving_student.py [--profile quick] [--eval-worlds 
 Trains, in a separate artifact store (``--store``, default ``/tmp/husky-exp-moving``), the moving-course
 memory student by the same DAgger recipe, but with a privileged motion estimate: every point of the
 current scan gets the true lateral speed of the cylinder it lies on (0 for walls and standing
-cylinders) instead of :func:`husky_course.planners.motion.lateral_velocities`. Everything else is
+cylinders) instead of :func:`husky_course.planners.motion.lateral_velocities` (where it walks on
+from there, in the walking map, is as in the course's student). Everything else is
 the course's student. Evaluates it and the course's student (which must be trained already) on the
 tuning set (evaluation set 1) and prints both success rates: the gap is what a perfect motion
 estimate would buy this network; the rest of the distance to the oracle is learning.
@@ -41,6 +42,7 @@ def main() -> None:
 
     import husky_course.planners.memory as memory_module
     from husky_course.data import store
+    from husky_course.planners import motion
     from husky_course.sim.fast import FastSimulator
 
     state: dict = {}
@@ -60,19 +62,21 @@ def main() -> None:
         state["t"] += 1
         state["pose"] = state["pose"] + np.r_[self._library.local_paths[action, -1][:2], 0.0]
 
-    def true_velocities(previous, now, max_step):  # type: ignore[no-untyped-def]
+    def true_velocities(self, now):  # type: ignore[no-untyped-def]
         world, pose = state["world"], state["pose"]
         obs = world.obstacles_at(float(state["t"]))
         at = now + pose[:2]
         gap = np.hypot(at[:, None, 0] - obs[None, :, 0], at[:, None, 1] - obs[None, :, 1]) - obs[None, :, 2]
         nearest = np.argmin(gap, 1)
         on = gap[np.arange(len(nearest)), nearest] < 0.05
-        return np.where(on, world.speeds[nearest], 0.0)
+        self.previous = np.asarray(now, float)[:, :2].copy()
+        self.velocity = np.where(on, world.speeds[nearest], 0.0)
+        return self.velocity
 
     FastSimulator.load = traced_load
     planner.reset = traced_reset
     planner.observe = traced_observe
-    memory_module.lateral_velocities = true_velocities
+    motion.MotionMemory.update = true_velocities
     os.environ[store.ARTIFACTS_ENV] = args.store
     from husky_course.imitation.dagger import get_memory
 

@@ -216,7 +216,7 @@ def _evaluate(args: argparse.Namespace) -> dict:
         raise PlannerError(f"--trained-on applies only to {', '.join(LEARNED_PLANNERS)}")
     if learned:
         kwargs["profile"] = with_world(base, args.trained_on or args.world)
-    if args.planner == "heuristic":
+    if args.planner in ("heuristic", "mapping", "tracking"):  # they read the course (tracking: its speeds)
         kwargs["config"] = profile.sim
     eval_world_seeds(args.worlds, args.seed)  # validate before building anything
     device = resolve_device(args.device)

@@ -24,6 +24,7 @@ from husky_course.data.labels import survival_at
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
 from husky_course.planners.perception import raster
 from husky_course.planners.registry import make_planner
+from husky_course.sim.camera import pixel_tangents
 from husky_course.sim.env import HuskyNavEnv
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import disc_check, expand, expand_with, survival
@@ -223,23 +224,59 @@ def test_moving_student_reads_its_motion_channels_and_beats_random():
     assert mine.mean_prims > rand.mean_prims + 1
 
 
-def test_lateral_velocities_from_two_scans():
-    """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step;
-    standing surfaces at 0; a piece with no match within one step's walk at 0."""
-    from husky_course.planners.motion import lateral_velocities, segments
+def _arc(centre: tuple[float, float], radius: float) -> np.ndarray:
+    """The scan points a cylinder gives the camera: the columns' rays cut with its circle."""
+    cam = MOVING.sim.camera
+    u = pixel_tangents(cam)[0]
+    d = np.c_[np.ones_like(u), u] / np.hypot(1, u)[:, None]
+    rel = np.array([cam.mount_forward, 0.0]) - centre
+    b = d @ rel
+    disc = b**2 - (rel @ rel - radius**2)
+    hit = disc > 0
+    s = -b[hit] - np.sqrt(disc[hit])
+    return np.array([cam.mount_forward, 0.0]) + s[:, None] * d[hit]
 
-    arc = np.c_[3.0 + 0.02 * np.sin(np.linspace(0, np.pi, 9)), np.linspace(-0.2, 0.2, 9)]
+
+def test_piece_centre_locates_a_cylinder():
+    """The fitted circle finds a cylinder's centre from the few columns that hit it (the points'
+    mean is pulled towards the camera and jumps as the columns change)."""
+    from husky_course.planners.motion import piece_centre
+
+    for cx, cy, r in [(2.0, 0.3, 0.2), (3.0, -0.8, 0.3), (3.0, 1.2, 0.25), (1.6, -1.0, 0.35)]:
+        pts = _arc((cx, cy), r)
+        assert len(pts) >= 2
+        found = piece_centre(pts, MOVING.sim.camera.mount_forward, 0.25)
+        assert abs(found[1] - cy) < 0.05  # across: what motion is read from
+        assert abs(found[0] - cx) < 0.1  # along the ray: off by about the radius prior's error
+        assert np.hypot(*(pts.mean(0) - (cx, cy))) > 0.1  # the mean is off by most of a radius
+
+
+def test_lateral_velocities_from_two_scans():
+    """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step
+    (the columns that hit it differ between the two); standing surfaces at 0; a piece with no match
+    within one step's walk at 0; a second look averages with the first."""
+    from husky_course.planners.motion import MotionMemory, lateral_velocities, segments
+
     wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
     far = np.c_[np.full(5, 4.5), np.linspace(-3.0, -2.8, 5)]
-    before = np.concatenate([wall, arc])
-    after = np.concatenate([wall, arc + [0.0, 0.4], far])
-    assert [len(s) for s in segments(after)] == [30, 9, 5]
-    v = lateral_velocities(before, after, max_step=0.6)
-    np.testing.assert_allclose(v[30:39], 0.4)
+    before = np.concatenate([wall, _arc((3.0, 0.0), 0.3)])
+    arc = _arc((3.0, 0.4), 0.3)
+    after = np.concatenate([wall, arc, far])
+    assert [len(s) for s in segments(after)] == [30, len(arc), 5]
+    m = MotionMemory(MOVING.sim)
+    v = lateral_velocities(before, after, 0.6, camera_x=m.camera_x, radius=m.radius)
+    np.testing.assert_allclose(v[30 : 30 + len(arc)], 0.4, atol=0.03)
     np.testing.assert_allclose(v[:30], 0.0, atol=1e-12)
-    np.testing.assert_array_equal(v[39:], 0.0)  # nothing near it before: unknown, taken as standing
-    assert (lateral_velocities(before, after, max_step=0.3)[30:39] == 0).all()  # too fast to be a match
+    np.testing.assert_array_equal(v[30 + len(arc) :], 0.0)  # nothing near it before: taken as standing
+    assert (lateral_velocities(before, after, max_step=0.3)[30 : 30 + len(arc)] == 0).all()  # too fast
     assert (lateral_velocities(np.empty((0, 2)), after, 0.6) == 0).all()
+    # the memory, over three images, the robot standing still: the second look averages
+    assert (m.update(before) == 0).all()
+    np.testing.assert_allclose(m.update(after)[30 : 30 + len(arc)], 0.4, atol=0.03)
+    third = np.concatenate([wall, _arc((3.0, 0.6), 0.3)])
+    np.testing.assert_allclose(m.update(third)[30:], (0.2 + 0.4) / 2, atol=0.03)
+    m.move(1.0, 0.0)
+    np.testing.assert_allclose(m.previous, third - [1.0, 0.0])
 
 
 def test_sim_for_world_round_trip():
@@ -272,3 +309,16 @@ def test_ceilings_order_snapshot_below_seen_motion_on_the_moving_course():
     still = evaluate(SnapshotPlanner(), 20, 1, config=QUICK.sim, progress=False)
     oracle = evaluate(make_planner("oracle"), 20, 1, config=QUICK.sim, progress=False)
     assert still.success_rate == oracle.success_rate
+
+
+def test_tracking_planner_is_mapping_on_static_and_reads_motion_on_moving():
+    """The mapping planner with motion: on the static course every velocity is 0 and it chooses as
+    the mapping planner does, world for world; on the moving course it crosses clearly more tuning
+    worlds than the mapping planner, whose map stands still."""
+    static = [run_episode(make_planner(n, config=QUICK.sim), FastSimulator(QUICK.sim), int(s), 10).actions
+              for n in ("mapping", "tracking") for s in eval_world_seeds(6, 1)]
+    assert static[:6] == static[6:]
+    tracking = evaluate(make_planner("tracking", config=MOVING.sim), 100, 1, config=MOVING.sim,
+                        progress=False, workers=2)
+    mapping = evaluate(make_planner("mapping", config=MOVING.sim), 100, 1, config=MOVING.sim, progress=False)
+    assert tracking.success_ci95[0] > mapping.success_ci95[1], (tracking.success_rate, mapping.success_rate)

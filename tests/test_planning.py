@@ -30,7 +30,7 @@ from husky_course.sim.backends import make_simulator
 
 QUICK = get_profile("quick")  # resolved once, passed down
 
-BASIC = ("random", "heuristic", "mapping", "oracle")
+BASIC = ("random", "heuristic", "mapping", "tracking", "oracle")
 JSON_FIELDS = {
     "planner",
     "worlds",
@@ -87,9 +87,10 @@ def test_bad_observations_raise(sim, name):
 
 
 def test_registry_errors(monkeypatch):
-    everything = {"random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "memory", "oracle"}
+    everything = {"random", "heuristic", "mapping", "tracking", "lookahead", "rnn", "distilled", "memory",
+                  "oracle"}
     assert set(PLANNERS) == everything
-    names = "random, heuristic, mapping, lookahead, rnn, distilled, memory, oracle"
+    names = "random, heuristic, mapping, tracking, lookahead, rnn, distilled, memory, oracle"
     with pytest.raises(PlannerError, match=f"choose one of {names}"):
         make_planner("astar")
     assert issubclass(PlannerError, ValueError)

@@ -12,11 +12,10 @@ starting with each primitive survives, the oracle's own survival labels. Memory 
 not in a recurrent state: the map is what lets a planner remember an obstacle beside the robot,
 and it costs one small convolution per decision.
 
-On the moving course (chapter 10) the map has two more channels (:func:`map_channels`,
-:data:`MOVING_INPUTS`): the current scan's points where they will be one step later, and where they
-will be when the robot reaches them, if they keep walking as they did since the previous image
-(:mod:`husky_course.planners.motion`: the previous scan is the memory that motion is inferred from;
-the map of everything seen cannot show it, it replaces what the camera sees again).
+On the moving course (chapter 10) the map walks (:class:`husky_course.planners.motion.WalkingMap`:
+each point carries the lateral speed inferred from successive scans) and has two more channels
+(:func:`map_channels`, :data:`MOVING_INPUTS`): the map's points where they will be one step later,
+and where they will be when the robot reaches them, if they keep walking.
 """
 
 from __future__ import annotations
@@ -31,12 +30,15 @@ from .paper import Encoder
 
 #: what the moving-course student's three channels hold (part of its artifact's fingerprint, so a
 #: change of representation retrains it): see :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
-MOVING_INPUTS = "map; current scan one step ahead; current scan at the robot's arrival (x / advance steps)"
+MOVING_INPUTS = (
+    "walking map (fitted-circle motion, two looks averaged); map one step ahead; map at the robot's arrival "
+    "(x / advance steps)"
+)
 
 
 def map_channels(sim: SimConfig) -> int:
     """Map channels the student reads: 1 (everything seen) on the static course, 3 on the moving one
-    (and the current scan one and two steps ahead)."""
+    (the walking map now, one step ahead, and at the robot's arrival)."""
     return 3 if world_kind(sim) == "moving" else 1
 
 

@@ -17,7 +17,7 @@ from ..config import MemoryConfig, SimConfig
 from ..models.memory import MemoryNet, map_channels
 from ..training.inference import model_device, single_thread
 from .base import EpisodeStart, Planner, check_observation, survival_scores
-from .motion import lateral_velocities
+from .motion import WalkingMap
 from .perception import DepthScan, EgoMap, raster
 
 
@@ -42,44 +42,38 @@ class MemoryPlanner(Planner):
         self.config, self.memory = config or SimConfig(), memory or MemoryConfig()
         cfg, mem = self.config, self.memory
         self.smooth = int(smooth)
-        self.map = EgoMap(DepthScan(cfg), forget_behind=mem.map_behind)
         self.channels = map_channels(cfg)
-        world = cfg.world
-        self._max_step = float(getattr(world, "speed_range", (0.0, 0.0))[1])  # the fastest walker, per step
+        # the moving course's map walks (its points carry the velocities inferred from successive scans)
+        walks = self.channels == 3
+        self.map = WalkingMap(cfg, mem.map_behind) if walks else EgoMap(DepthScan(cfg), mem.map_behind)
         self._advance = cfg.primitives.advance  # m forward per step, whatever the primitive
-        self._previous = np.empty((0, 2))  # the last image's scan, in the current frame (moving course)
         self._library = None
         self.last_input: tuple[np.ndarray, np.ndarray] | None = None
 
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
         self.map.reset()
-        self._previous = np.empty((0, 2))
         self._library = start.library
 
     def prepare(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``.
 
-        The raster is ``(cells, cells)``, or ``(3, cells, cells)`` on the moving course: the map,
-        then the current scan's points one step ahead at the lateral speeds inferred from the
-        previous image's scan (:mod:`~husky_course.planners.motion`; standing still at the first
-        step, when there is no previous scan), then each point where it will be when the robot
-        reaches its forward distance ``x``: every primitive advances the same distance per step
-        at a constant forward speed, so that is ``x / advance`` steps from now, and the moving
+        The raster is ``(cells, cells)``, or ``(3, cells, cells)`` on the moving course, where the
+        map walks (:class:`~husky_course.planners.motion.WalkingMap`: every point carries the
+        lateral speed inferred from successive scans, standing still until a second image has
+        seen it): the map now, the map one step ahead, then each point where it will be when the
+        robot reaches its forward distance ``x``: every primitive advances the same distance per
+        step at a constant forward speed, so that is ``x / advance`` steps from now, and the moving
         course seen this way is a static one (up to the bounces and the cylinders' own width).
         """
         image = check_observation(obs, self.config.camera.size)
         self.map.add(image)
         m = self.memory
         cells = (m.map_cells, m.map_behind, m.map_ahead, m.map_half_width)
-        grid = self.map.raster(*cells)
-        if self.channels == 3:
-            now = self.map.scan(image)
-            v = lateral_velocities(self._previous, now, self._max_step)
-            soon = now + np.c_[np.zeros(len(v)), v]
-            arrival = now + np.c_[np.zeros(len(v)), v * now[:, 0] / self._advance]
-            grid = np.stack([grid, raster(soon, *cells), raster(arrival, *cells)])
-            self._previous = now
+        grid = raster(self.map.points, *cells)
+        if isinstance(self.map, WalkingMap):
+            arrival = self.map.at(np.maximum(self.map.points[:, 0], 0.0) / self._advance)
+            grid = np.stack([grid, raster(self.map.at(1.0), *cells), raster(arrival, *cells)])
         self.last_input = (image, grid)
         return self.last_input
 
@@ -104,4 +98,3 @@ class MemoryPlanner(Planner):
             raise RuntimeError("call reset(start) before observe()")
         end = self._library.local_paths[action, -1]
         self.map.move(float(end[0]), float(end[1]))
-        self._previous = self._previous - end[:2]

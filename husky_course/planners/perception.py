@@ -82,10 +82,15 @@ class EgoMap:
         """Forget everything (a new episode)."""
         self.points = np.empty((0, 3))
 
-    def add(self, obs: np.ndarray) -> None:
-        """Merge the scan of ``obs`` into the map (see the class docstring)."""
+    def add(self, obs: np.ndarray) -> np.ndarray:
+        """Merge the scan of ``obs`` into the map (see the class docstring).
+
+        Returns which of the points held before were kept (a boolean mask over them): the new
+        scan's points come first in :attr:`points`, then the kept ones, in their order.
+        """
         cam = self.scan.camera
         d = self.scan.columns(obs)
+        kept = np.ones(len(self.points), bool)
         if len(self.points):
             dx = self.points[:, 0] - cam.mount_forward
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -94,11 +99,13 @@ class EgoMap:
             j = np.floor(col + 0.5).astype(int)
             in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
             seen_again = in_view & (dx < d[np.clip(j, 0, cam.size - 1)] + self.points[:, 2] + 0.05)
-            self.points = self.points[~seen_again]
+            kept = ~seen_again
+            self.points = self.points[kept]
         seen = np.isfinite(d)
         ds, us = d[seen], self.scan.u[seen]
         new = np.stack([cam.mount_forward + ds, ds * us, ds * self._half_gap], axis=1)
         self.points = np.concatenate([new, self.points])
+        return kept
 
     def raster(self, cells: int, behind: float, ahead: float, half_width: float) -> np.ndarray:
         """The map as a ``(cells, cells)`` occupancy image: row = forward distance, column = lateral.
@@ -109,7 +116,10 @@ class EgoMap:
         """
         return raster(self.points, cells, behind, ahead, half_width)
 
-    def move(self, dx: float, dy: float) -> None:
-        """Dead reckoning after a primitive that moved the robot by ``(dx, dy)`` (heading unchanged)."""
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        """Dead reckoning after a primitive that moved the robot by ``(dx, dy)`` (heading unchanged);
+        returns which points were kept (a boolean mask over those held before)."""
         moved = self.points - np.array([dx, dy, 0.0])
-        self.points = moved[moved[:, 0] > -self.forget_behind]
+        kept = moved[:, 0] > -self.forget_behind
+        self.points = moved[kept]
+        return kept

@@ -13,13 +13,15 @@ from .base import Planner, PlannerError
 from .classic import HeuristicPlanner, RandomPlanner
 from .mapping import MappingPlanner
 from .oracle import OraclePlanner
+from .tracking import TrackingPlanner
 
-PLANNERS = ("random", "heuristic", "mapping", "lookahead", "rnn", "distilled", "memory", "oracle")
+PLANNERS = ("random", "heuristic", "mapping", "tracking", "lookahead", "rnn", "distilled", "memory", "oracle")
 LEARNED_PLANNERS = ("lookahead", "rnn", "distilled", "memory")
 _CLASSES: dict[str, type[Planner]] = {
     "random": RandomPlanner,
     "heuristic": HeuristicPlanner,
     "mapping": MappingPlanner,
+    "tracking": TrackingPlanner,
     "oracle": OraclePlanner,
 }
 

@@ -1,0 +1,76 @@
+"""The mapping planner on the moving course: its map's points walk, and it plans in space-time.
+
+No learning and no privileged input: the classical counterpart of the moving-trained memory
+student (chapter 10), reading the same two things the student's memory gives it.
+
+* **Motion from successive images.** Each scan's pieces of surface are located (a fitted circle)
+  and matched to the previous scan's, moved into the current frame by dead reckoning
+  (:func:`~husky_course.planners.motion.lateral_velocities`): every point of the current scan gets
+  the lateral displacement per step of its piece (0 for a piece seen for the first time: assumed
+  standing until the next image says otherwise).
+* **A map that walks** (:class:`~husky_course.planners.motion.WalkingMap`). The points of
+  :class:`~husky_course.planners.mapping.MappingPlanner`'s map each carry that velocity; after
+  every step a remembered point moves by it (dead reckoning of the robot *and* of the obstacle),
+  and a point seen again is replaced by the new scan's.
+* **Space-time search.** The oracle's lattice search over the map: a standing point is judged on
+  the mapping planner's clearance grid, a walking point exactly, where it is at each sample's time
+  (level ``k`` of the lattice is the step from ``k`` to ``k + 1`` steps after now).
+
+On the static course every velocity is 0 and it is the mapping planner. Its ``horizon`` (5, as the
+mapping planner's) was chosen on evaluation set 1, the tuning set (see chapter 10).
+
+Against the privileged "seen, with motion" planner (every cylinder the camera has shown, its
+true position and velocity) it measures what estimating motion from depth images costs; against
+the mapping planner, what estimating it is worth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import SimConfig
+from ..sim.lattice import expand_with, rank_plans
+from .mapping import ClearanceGrid, MappingPlanner
+from .motion import WalkingMap
+
+
+class TrackingPlanner(MappingPlanner):
+    """:class:`MappingPlanner` whose map points carry estimated lateral velocities (module docstring)."""
+
+    name = "tracking"  #: the mapping planner, with motion
+
+    def __init__(self, config: SimConfig | None = None, horizon: int = 5, **kwargs: float) -> None:
+        super().__init__(config, horizon, **kwargs)
+        self.map = WalkingMap(self.config, self.map.forget_behind)  # type: ignore[assignment]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Each map point's estimated lateral velocity (m per step)."""
+        return self.map.velocity
+
+    def plan(self, obs: np.ndarray) -> tuple[int, np.ndarray]:
+        if self._library is None:
+            raise RuntimeError("call reset(start) before act()")
+        self.map.add(obs)
+        horizon = max(1, min(self.horizon, self._remaining))
+        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))
+        walking = self.velocity != 0
+        reach = self.radius + self.margin + self.cap
+        grid = ClearanceGrid(  # the standing points, as the mapping planner's
+            self.points[~walking], x0=-reach, x1=horizon * self.advance + reach,
+            y1=horizon * self.spread + reach, resolution=self.resolution, reach=reach,
+        )
+        movers, speeds = self.points[walking], self.velocity[walking]
+
+        def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            x, y, t = X[:, ::every], Y[..., ::every], T[::every]
+            gap = grid(np.broadcast_to(x, y.shape), y)
+            near = np.flatnonzero((movers[:, 0] > x.min() - reach) & (movers[:, 0] < x.max() + reach))
+            for (px, py, r), v in zip(movers[near], speeds[near], strict=True):  # where it is at each sample
+                np.minimum(gap, np.hypot(x - px, y - (py + v * t)) - r, out=gap)
+            clear = gap.min(-1) - self.radius
+            return clear < self.margin, clear - self.margin
+
+        lattice = expand_with(check, self._library, np.zeros(3), horizon)
+        ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
+        return int(ranking.choice[0][0]), ranking.keys[0][0]
