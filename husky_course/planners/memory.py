@@ -1,11 +1,13 @@
 """The memory student: a learned planner that remembers what earlier images showed.
 
 It sees what every unprivileged planner sees (depth images, the primitives it applied, its own
-library). It keeps the mapping planner's egocentric map (:class:`~husky_course.planners.perception.EgoMap`),
-rasterises it, and lets :class:`~husky_course.models.memory.MemoryNet` predict how long the best
-continuation starting with each primitive survives; it applies the primitive predicted to survive
+library). It keeps the mapping planner's egocentric map (:class:`~husky_course.planners.perception.EgoMap`;
+on the moving course a :class:`~husky_course.planners.motion.WalkingMap`, whose points carry the
+velocities read off successive scans), rasterises it, and lets
+:class:`~husky_course.models.memory.MemoryNet` predict how long the best continuation starting
+with each primitive survives; it applies the primitive predicted to survive
 longest (:func:`~husky_course.planners.base.survival_scores`). The network is trained by
-:mod:`husky_course.training.dagger` from the oracle as a privileged teacher.
+:mod:`husky_course.imitation.dagger` from the oracle as a privileged teacher.
 """
 
 from __future__ import annotations
