@@ -322,3 +322,23 @@ def test_tracking_planner_is_mapping_on_static_and_reads_motion_on_moving():
                         progress=False, workers=2)
     mapping = evaluate(make_planner("mapping", config=MOVING.sim), 100, 1, config=MOVING.sim, progress=False)
     assert tracking.success_ci95[0] > mapping.success_ci95[1], (tracking.success_rate, mapping.success_rate)
+
+
+def test_walking_map_points_walk_on():
+    """The moving course's map: a point keeps its velocity and walks one step per primitive (also
+    where the camera no longer sees it); dead reckoning moves everything by the robot's displacement."""
+    from husky_course.planners.motion import WalkingMap
+
+    sim = FastSimulator(MOVING.sim)
+    world = sim.load(int(eval_world_seeds(1, 1)[0]))
+    walking = WalkingMap(MOVING.sim, forget_behind=1.0)
+    first = walking.add(sim.depth(world.start[None], 0)[0])
+    assert (first == 0).all() and len(walking.points) == len(first)  # one image: nothing known to move
+    walking.velocity[:] = 0.3  # as if every point had been seen walking
+    before = walking.points.copy()
+    np.testing.assert_allclose(walking.at(2.0)[:, 1], before[:, 1] + 0.6)
+    walking.move(1.0, 0.2)
+    kept = before[:, 0] - 1.0 > -1.0
+    np.testing.assert_allclose(walking.points, before[kept] - [1.0, 0.2 - 0.3, 0.0])
+    np.testing.assert_allclose(walking.motion.previous, walking.map.scan(sim.depth(world.start[None], 0)[0])
+                               - [1.0, 0.2])
