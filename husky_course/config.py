@@ -313,9 +313,9 @@ BUILD_MINUTES: dict[str, dict[str, float]] = {
         "certificate": 0.4,
     },
     "full": {
-        "dataset": 0.2, "encoder_decoder": 6, "reward_net": 0.3, "safety_image": 2.5, "safety_prim": 2.5,
-        "joint": 5, "diagnosis": 2.5, "rnn": 7, "survival labels": 0.5, "distilled": 5.5, "memory": 4,
-        "certificate": 2,
+        "dataset": 0.2, "encoder_decoder": 1.5, "reward_net": 0.4, "safety_image": 0.5, "safety_prim": 0.5,
+        "joint": 1.3, "diagnosis": 2, "rnn": 1.6, "survival labels": 0.9, "distilled": 1.1, "memory": 4,
+        "certificate": 2.7,
     },
 }
 
