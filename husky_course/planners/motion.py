@@ -12,7 +12,7 @@ them into the current frame by dead reckoning, and compares them with the curren
   long is a wall, or several things: its mean). A cylinder's centre moves only with the cylinder,
   where the mean of its visible points also moves as the robot's viewpoint changes which columns
   hit it; on the tuning worlds the fit's median error on a moving cylinder's step is 0.02 m,
-  the mean's 0.09 m (``benchmarks/exp_moving_tracker.py``);
+  the mean's 0.11 m (``benchmarks/exp_moving_tracker.py``);
 * :func:`lateral_velocities` matches each current piece to a previous piece at about the same
   forward distance (cylinders move only across the course) within one step's walk, the one whose
   displacement best continues its own estimated velocity, and gives every point of the piece that
