@@ -233,14 +233,14 @@ rows = [{"planner": n, "success (moving)": r.success_rate,
 display(Markdown(markdown_table(rows)))
 
 # %%
-fig, ax = plt.subplots(figsize=(9, 3.6))
+fig, ax = plt.subplots(figsize=(10.5, 3.8))
 x = np.arange(len(names))
 s = np.array([res[n].success_rate for n in names])
 c = np.array([res[n].success_ci95 for n in names])
 ax.bar(x, s, yerr=[s - c[:, 0], c[:, 1] - s], capsize=4, color="tab:purple", label="moving course")
 st = [res_static[n].success_rate if n in res_static else np.nan for n in names]
 ax.scatter(x, st, marker="_", s=400, color="k", zorder=5, label="same planner, static course")
-ax.set_xticks(x, [n.replace(" (", "\n(") for n in names], fontsize=8)
+ax.set_xticks(x, [n.replace(" (", "\n(").replace(", ", ",\n").replace("-", "-\n") for n in names], fontsize=8)
 ax.set_ylabel("success rate")
 ax.set_ylim(0, 1.05)
 ax.legend(fontsize=8)
