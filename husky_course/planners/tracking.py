@@ -17,7 +17,9 @@ student (chapter 10), reading the same two things the student's memory gives it.
   (level ``k`` of the lattice is the step from ``k`` to ``k + 1`` steps after now).
 
 On the static course every velocity is 0 and it is the mapping planner. Its ``horizon`` (5, as the
-mapping planner's) was chosen on evaluation set 1, the tuning set (see chapter 10).
+mapping planner's) was chosen on evaluation set 1, the tuning set: success on 200 moving worlds
+0.625 / 0.655 / 0.675 / 0.670 / 0.670 for horizons 3 / 4 / 5 / 6 / 8, full profile
+(``benchmarks/exp_moving_tracker.py``).
 
 Against the privileged "seen, with motion" planner (every cylinder the camera has shown, its
 true position and velocity) it measures what estimating motion from depth images costs; against
