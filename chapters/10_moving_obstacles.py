@@ -334,3 +334,9 @@ if fails:
 #    of foresight close?
 # 4. Where on the moving course would you expect the static-trained memory student's map to mislead
 #    it? (Hint: what does the map keep of a cylinder that has walked out of the field of view?)
+# 5. *A cylinder behind its arc.* `arc, r = exercises.cylinder_arc(0, moving.sim)` gives the scan
+#    points (robot frame) one cylinder of radius `r` gave the camera. Find its centre: every point
+#    lies at distance `r` from it, and it is behind the points as the camera sees them (two points
+#    already fix it). How far from it is the points' mean, and why does that make the mean a poor
+#    way to read a cylinder's motion from two images? Check with
+#    `exercises.check_arc_centre(arc, r, your_centre, moving.sim)`.

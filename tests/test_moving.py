@@ -294,6 +294,20 @@ def test_exercise_checks():
     with pytest.raises(AssertionError, match="does not move"):
         exercises.check_mover_position(5, MOVING.sim, still, 3.5, 0.0)
     assert exercises.check_sample_time(4, 25, 101, 4.25)
+    arc, r = exercises.cylinder_arc(3, MOVING.sim)
+    from husky_course.planners.motion import piece_centre
+
+    found = piece_centre(arc, MOVING.sim.camera.mount_forward, r)  # the radius known: the fit is exact
+    assert exercises.check_arc_centre(arc, r, found, MOVING.sim)
+    with pytest.raises(AssertionError, match="off your circle"):
+        exercises.check_arc_centre(arc, r, arc.mean(0), MOVING.sim)
+    ends = arc[[0, -1]]  # two of its points: the other circle of radius r through them is in front
+    chord, mid = ends[1] - ends[0], ends.mean(0)
+    normal = np.array([chord[1], -chord[0]]) / np.hypot(*chord)
+    front = mid - normal * np.sqrt(r**2 - (np.hypot(*chord) / 2) ** 2) * np.sign(normal @ (found - mid))
+    assert exercises.check_arc_centre(ends, r, found, MOVING.sim)
+    with pytest.raises(AssertionError, match="in front of them"):
+        exercises.check_arc_centre(ends, r, front, MOVING.sim)
     with pytest.raises(AssertionError):
         exercises.check_sample_time(4, 25, 101, 4.2475)
 

@@ -171,3 +171,48 @@ def check_sample_time(step: int, sample: int, samples: int, t: float) -> bool:
             "not quite: a primitive takes one step; its first sample is at its start, its last at its end"
         )
     return _ok(f"sample {sample} of {samples} of the primitive started at step {step} is at time {true:.4f}")
+
+
+def cylinder_arc(seed: int, sim: SimConfig) -> tuple[np.ndarray, float]:
+    """Chapter 10, exercise 5: the scan points ``(m, 2)`` (robot frame) that one cylinder gives the
+    camera, and its radius ``r``. The cylinder, drawn from ``seed``, stands 1.5-3 m ahead within
+    1 m of the axis; each column's ray is cut with its circle (as
+    :class:`~husky_course.planners.perception.DepthScan` reads a rendered image), so at least two
+    columns hit it."""
+    from ..sim.camera import pixel_tangents
+
+    rng = np.random.default_rng(seed)
+    cam = sim.camera
+    u = pixel_tangents(cam)[0]
+    d = np.c_[np.ones_like(u), u] / np.hypot(1.0, u)[:, None]
+    eye = np.array([cam.mount_forward, 0.0])
+    while True:
+        centre = np.array([rng.uniform(1.5, 3.0), rng.uniform(-1.0, 1.0)])
+        r = float(rng.uniform(*sim.world.radius_range))
+        b = d @ (eye - centre)
+        disc = b**2 - (np.sum((eye - centre) ** 2) - r**2)
+        hit = disc > 0
+        if hit.sum() >= 2:
+            return eye + (-b[hit] - np.sqrt(disc[hit]))[:, None] * d[hit], r
+
+
+def check_arc_centre(arc: np.ndarray, r: float, centre: np.ndarray, sim: SimConfig) -> bool:
+    """Chapter 10, exercise 5: the centre of the cylinder of radius ``r`` whose surface gave ``arc``.
+
+    Right when every point lies on the circle (within 1 cm) and the centre is behind the points,
+    as seen from the camera (two circles of radius ``r`` pass through two points; only one is the
+    cylinder's).
+    """
+    arc, centre = np.asarray(arc, float), np.asarray(centre, float).ravel()[:2]
+    off = np.abs(np.hypot(*(arc - centre).T) - r)
+    if off.max() > 0.01:
+        raise AssertionError(
+            f"not quite: the points lie {off.max():.3f} m off your circle at worst; every point of the arc "
+            "is at distance r from the centre"
+        )
+    eye = np.array([sim.camera.mount_forward, 0.0])
+    if np.hypot(*(centre - eye)) < np.hypot(*(arc.mean(0) - eye)):
+        raise AssertionError("that circle passes through the points, but its centre is in front of them: "
+                             "the camera sees the cylinder's near side")
+    mean_off = float(np.hypot(*(arc.mean(0) - centre)))
+    return _ok(f"centre ({centre[0]:.3f}, {centre[1]:.3f}); the points' mean is {mean_off:.3f} m from it")
