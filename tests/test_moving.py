@@ -24,7 +24,6 @@ from husky_course.data.labels import survival_at
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
 from husky_course.planners.perception import raster
 from husky_course.planners.registry import make_planner
-from husky_course.sim.camera import pixel_tangents
 from husky_course.sim.env import HuskyNavEnv
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import disc_check, expand, expand_with, survival
@@ -226,15 +225,7 @@ def test_moving_student_reads_its_motion_channels_and_beats_random():
 
 def _arc(centre: tuple[float, float], radius: float) -> np.ndarray:
     """The scan points a cylinder gives the camera: the columns' rays cut with its circle."""
-    cam = MOVING.sim.camera
-    u = pixel_tangents(cam)[0]
-    d = np.c_[np.ones_like(u), u] / np.hypot(1, u)[:, None]
-    rel = np.array([cam.mount_forward, 0.0]) - centre
-    b = d @ rel
-    disc = b**2 - (rel @ rel - radius**2)
-    hit = disc > 0
-    s = -b[hit] - np.sqrt(disc[hit])
-    return np.array([cam.mount_forward, 0.0]) + s[:, None] * d[hit]
+    return exercises.cylinder_points(np.array(centre), radius, MOVING.sim)
 
 
 def test_piece_centre_locates_a_cylinder():

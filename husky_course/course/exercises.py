@@ -173,27 +173,34 @@ def check_sample_time(step: int, sample: int, samples: int, t: float) -> bool:
     return _ok(f"sample {sample} of {samples} of the primitive started at step {step} is at time {true:.4f}")
 
 
-def cylinder_arc(seed: int, sim: SimConfig) -> tuple[np.ndarray, float]:
-    """Chapter 10, exercise 5: the scan points ``(m, 2)`` (robot frame) that one cylinder gives the
-    camera, and its radius ``r``. The cylinder, drawn from ``seed``, stands 1.5-3 m ahead within
-    1 m of the axis; each column's ray is cut with its circle (as
-    :class:`~husky_course.planners.perception.DepthScan` reads a rendered image), so at least two
-    columns hit it."""
+def cylinder_points(centre: np.ndarray, r: float, sim: SimConfig) -> np.ndarray:
+    """The scan points ``(m, 2)`` (robot frame) that a lone cylinder of radius ``r`` at ``centre``
+    gives the camera: each column's ray cut with its circle, as
+    :class:`~husky_course.planners.perception.DepthScan` reads a rendered image."""
     from ..sim.camera import pixel_tangents
 
-    rng = np.random.default_rng(seed)
     cam = sim.camera
     u = pixel_tangents(cam)[0]
     d = np.c_[np.ones_like(u), u] / np.hypot(1.0, u)[:, None]
     eye = np.array([cam.mount_forward, 0.0])
+    rel = eye - np.asarray(centre, float)
+    b = d @ rel
+    disc = b**2 - (rel @ rel - r**2)
+    hit = disc > 0
+    return eye + (-b[hit] - np.sqrt(disc[hit]))[:, None] * d[hit]
+
+
+def cylinder_arc(seed: int, sim: SimConfig) -> tuple[np.ndarray, float]:
+    """Chapter 10, exercise 5: the scan points ``(m, 2)`` that one cylinder gives the camera
+    (:func:`cylinder_points`), and its radius ``r``. The cylinder, drawn from ``seed``, stands
+    1.5-3 m ahead within 1 m of the axis, and at least two columns hit it."""
+    rng = np.random.default_rng(seed)
     while True:
         centre = np.array([rng.uniform(1.5, 3.0), rng.uniform(-1.0, 1.0)])
         r = float(rng.uniform(*sim.world.radius_range))
-        b = d @ (eye - centre)
-        disc = b**2 - (np.sum((eye - centre) ** 2) - r**2)
-        hit = disc > 0
-        if hit.sum() >= 2:
-            return eye + (-b[hit] - np.sqrt(disc[hit]))[:, None] * d[hit], r
+        points = cylinder_points(centre, r, sim)
+        if len(points) >= 2:
+            return points, r
 
 
 def check_arc_centre(arc: np.ndarray, r: float, centre: np.ndarray, sim: SimConfig) -> bool:
