@@ -50,22 +50,26 @@ def truth(world: World, t: int, pose: np.ndarray, now: np.ndarray) -> tuple[np.n
 def estimation(profile, worlds: int) -> None:  # type: ignore[no-untyped-def]
     sim, scan = FastSimulator(profile.sim), DepthScan(profile.sim)
     mean_way = MotionMemory(profile.sim)
-    rows: dict[str, list] = {"mean of the points": [], "fitted circle": []}
+    rows: dict[str, list] = {"mean of the points": [], "fitted circle": [], "tracks": []}
     for seed in eval_world_seeds(worlds, 1):
         world = sim.load(int(seed))
         pose, oracle = world.start.copy(), OraclePlanner()
         oracle.reset(episode_start(oracle, sim, int(seed), pose, profile.sim.max_primitives))
-        fitted, previous = MotionMemory(profile.sim), np.empty((0, 2))
+        fitted, previous, v_pair = MotionMemory(profile.sim), np.empty((0, 2)), np.empty(0)
         for t in range(profile.sim.max_primitives):
             obs = sim.depth(pose[None], t)[0]
             now = scan(obs)
             on, dy = truth(world, t - 1, pose, now)  # the step that ended now
             v_mean = lateral_velocities(previous, now, mean_way.max_step, radius=0.0, x_gate=0.5)
+            v_pair = lateral_velocities(
+                previous, now, fitted.max_step, v_pair, fitted.camera_x, fitted.radius, fitted.spacing
+            )
             v_fit = fitted.update(now)
             if t > 0:
                 moving = dy[on] != 0
                 rows["mean of the points"].append(np.c_[v_mean[on], dy[on], moving])
-                rows["fitted circle"].append(np.c_[v_fit[on], dy[on], moving])
+                rows["fitted circle"].append(np.c_[v_pair[on], dy[on], moving])
+                rows["tracks"].append(np.c_[v_fit[on], dy[on], moving])
             action = oracle.act(obs, pose.copy())
             result = sim.apply(pose, action, t)
             end = sim.library.local_paths[action, -1]

@@ -149,15 +149,16 @@ display(Markdown(
 # are. Two planners read motion off successive images, with nothing privileged: the scans are their
 # own images, the displacement their own primitive.
 #
-# **Motion from two images** (`husky_course.planners.motion`). The robot keeps the previous image's
-# scan, moves it into the current frame by dead reckoning, and cuts both scans into pieces of
-# surface. Each piece is located by the circle that best fits its points (its radius held near the
-# course's typical radius): a cylinder gives the camera only a few columns, and which ones changes
-# as the robot moves, so the mean of a piece's points jumps by a good part of a radius from one image
-# to the next while the fitted centre moves only with the cylinder. Each piece now is matched to a
-# piece one step before at the same forward distance (cylinders walk only across) and within one
-# step's walk; the difference is its velocity, averaged with the previous estimate on a second look.
-# A piece seen for the first time is taken as standing until the next image.
+# **Motion from successive images** (`husky_course.planners.motion`). The robot cuts each scan into
+# pieces of surface (and cuts again where two arcs meet). Each piece is located by the circle that
+# best fits its points (its radius held near the course's typical radius): a cylinder gives the
+# camera only a few columns, and which ones changes as the robot moves, so the mean of a piece's
+# points jumps by a good part of a radius from one image to the next while the fitted centre moves
+# only with the cylinder. Each located piece joins a *track*: the sightings of one cylinder in the
+# last four images, moved into the current frame by dead reckoning. Its velocity is the weighted
+# line through them, the near looks (many columns, centimetres) counting more than the far ones (one
+# or two columns, a column's width). A piece seen for the first time has no velocity yet: it is
+# taken as standing until the next image, and marked as *seen once*.
 # `benchmarks/exp_moving_tracker.py` measures the estimate against the truth.
 #
 # **The map walks.** Both planners keep the mapping planner's map of everything seen (chapter 8),
@@ -165,12 +166,14 @@ display(Markdown(
 # longer sees it. The **mapping planner with motion** (`tracking`, no learning) plans over it with
 # the space-time lattice search: a walking point is checked where it will be at each sample's time.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
-# from the space-time oracle; it reads three rasters of the walking map: where its points are now,
-# one step later, and *when the robot reaches them*. Every primitive advances the same distance per
-# step at a constant forward speed, so a point `x` metres ahead is reached `x / advance` steps from
-# now: moved by that many steps of its walk, the moving course becomes a static one (up to the
-# bounces and the cylinders' own width), the kind of map the static student already reads. The
-# memory student of chapter 8, trained on the static course, runs beside it as it is.
+# from the space-time oracle; it reads four rasters of the walking map: where its points are now,
+# one step later, *when the robot reaches them*, and which of them were seen only once. Every
+# primitive advances the same distance per step at a constant forward speed, so a point `x` metres
+# ahead is reached `x / advance` steps from now: moved by that many steps of its walk, the moving
+# course becomes a static one (up to the bounces and the cylinders' own width), the kind of map the
+# static student already reads. The points seen once have no velocity yet; the tracker takes them as
+# standing, while the student learns from its labels how much room they need. The memory student of
+# chapter 8, trained on the static course, runs beside it as it is.
 
 # %%
 LOOK_AHEAD = 2  # as in chapters 7 and 8
@@ -182,8 +185,8 @@ display(Markdown(markdown_table([
 
 # %% [markdown]
 # What the moving-trained student reads at the third step of the world above (the oracle driving):
-# the depth image, its walking map now, one step ahead, and where each point will be when the robot
-# gets there.
+# the depth image, its walking map now, one step ahead, where each point will be when the robot
+# gets there, and the points seen by one image only.
 
 # %%
 student = make_planner("memory", profile=moving)
@@ -191,10 +194,10 @@ student.reset(episode_start(student, sim, world_seed, shown.poses[0], moving.sim
 for k in range(3):
     image, grid = student.prepare(sim.depth(shown.poses[k][None], k)[0])
     student.observe(shown.actions[k], None)
-fig, axes = plt.subplots(1, 4, figsize=(11, 2.9))
+fig, axes = plt.subplots(1, 5, figsize=(13, 2.9))
 plotting.show_depth(image, axes[0], "depth image, time 2")
-for ax, g, title in zip(axes[1:], grid, ("its map, now", "one step ahead", "when it gets there"),
-                        strict=True):
+titles = ("its map, now", "one step ahead", "when it gets there", "seen once")
+for ax, g, title in zip(axes[1:], grid, titles, strict=True):
     ax.imshow(g, cmap="Greys", vmin=0, vmax=1)
     ax.set_title(title, fontsize=9)
     ax.set_xticks([])

@@ -205,18 +205,23 @@ def test_moving_student_reads_its_motion_channels_and_beats_random():
     from husky_course.planners.base import episode_start
 
     student = make_planner("memory", profile=MOVING)
-    assert student.model.channels == 3 and student.channels == 3
+    assert student.model.channels == 4 and student.channels == 4
     assert make_planner("memory", profile=QUICK).channels == 1
     sim = FastSimulator(MOVING.sim)
     world = sim.load(int(eval_world_seeds(1, 1)[0]))
     student.reset(episode_start(student, sim, world.seed, world.start, 10))
     image, grid = student.prepare(sim.depth(world.start[None], 0)[0])
     cells = MOVING.memory.map_cells
-    assert grid.shape == (3, cells, cells)
+    assert grid.shape == (4, cells, cells)
     now = raster(student.map.scan(image), cells, MOVING.memory.map_behind, MOVING.memory.map_ahead,
                  MOVING.memory.map_half_width)
     np.testing.assert_array_equal(grid[1], now)  # no previous scan yet: nothing is known to move
     np.testing.assert_array_equal(grid[2], now)
+    scan = student.map.scan(image)  # and every cylinder is seen for the first time (walls are never tracked)
+    once = raster(scan[student.map.motion.tracks.fresh], cells, MOVING.memory.map_behind,
+                  MOVING.memory.map_ahead, MOVING.memory.map_half_width)
+    np.testing.assert_array_equal(grid[3], once)
+    assert once.any() and (once <= now).all()
     mine = evaluate(student, 60, 1, config=MOVING.sim, progress=False, workers=2)
     rand = evaluate(make_planner("random"), 60, 1, config=MOVING.sim, progress=False)
     assert mine.success_ci95[0] > rand.success_ci95[1]
@@ -347,3 +352,49 @@ def test_walking_map_points_walk_on():
     np.testing.assert_allclose(walking.points, before[kept] - [1.0, 0.2 - 0.3, 0.0])
     np.testing.assert_allclose(walking.motion.previous, walking.map.scan(sim.depth(world.start[None], 0)[0])
                                - [1.0, 0.2])
+
+
+def test_segments_cut_two_cylinders_side_by_side():
+    """Two touching cylinders give one run of close points; the peak of forward distance where
+    their arcs meet cuts it in two. A wall along the course has no such peak and stays whole."""
+    from husky_course.planners.motion import segments
+
+    left, right = _arc((1.6, 0.3), 0.3), _arc((1.6, -0.3), 0.3)
+    assert np.hypot(*(left[-1] - right[0])) < 0.3  # close enough to be one piece by distance alone
+    assert [len(s) for s in segments(np.concatenate([left, right]))] == [len(left), len(right)]
+    wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
+    assert [len(s) for s in segments(wall)] == [30]
+
+
+def test_tracks_fit_a_weighted_line_through_their_looks():
+    """A track's velocity is the weighted least-squares slope of its looks: a far, coarse look
+    counts for little beside two near, precise ones; one look gives no velocity."""
+    from husky_course.planners.motion import Tracks
+
+    looks = np.array([[2.0, 4.0, 0.3, 0.3], [1.0, 3.0, 0.4, 0.02], [0.0, 2.0, 0.8, 0.02]])  # age, x, y, sigma
+    y, v = Tracks.line(looks)
+    assert abs(v - 0.4) < 0.01 and abs(y - 0.8) < 0.01  # the two precise looks' line
+    assert abs(np.polyfit([-2, -1, 0], looks[:, 2], 1)[0] - 0.25) < 1e-9  # unweighted: pulled to 0.25
+    assert Tracks.line(looks[:1]) == (0.3, 0.0)
+
+
+def test_motion_memory_follows_a_walking_cylinder_as_the_robot_drives():
+    """Driving 1 m per step towards a cylinder walking 0.4 m per step across: its first image
+    gives no velocity (its points are marked seen once), later ones the walk; on the static
+    course nothing walks and nothing is new."""
+    from husky_course.planners.motion import MotionMemory
+
+    m = MotionMemory(MOVING.sim)
+    for k in range(3):
+        scan = _arc((4.0 - k, -0.5 + 0.4 * k), 0.3)  # the robot's frame: it drove k metres
+        v = m.update(scan)
+        if k == 0:
+            assert (v == 0).all() and m.tracks.fresh.all()
+        else:
+            np.testing.assert_allclose(v, 0.4, atol=0.05)
+            assert not m.tracks.fresh.any()
+        m.move(1.0, 0.0)
+    still = MotionMemory(QUICK.sim)
+    for k in range(2):
+        assert (still.update(_arc((4.0 - k, 0.4 * k), 0.3)) == 0).all() and not still.tracks.fresh.any()
+        still.move(1.0, 0.0)

@@ -13,9 +13,10 @@ not in a recurrent state: the map is what lets a planner remember an obstacle be
 and it costs one small convolution per decision.
 
 On the moving course (chapter 10) the map walks (:class:`husky_course.planners.motion.WalkingMap`:
-each point carries the lateral speed inferred from successive scans) and has two more channels
+each point carries the lateral speed inferred from successive scans) and has three more channels
 (:func:`map_channels`, :data:`MOVING_INPUTS`): the map's points where they will be one step later,
-and where they will be when the robot reaches them, if they keep walking.
+where they will be when the robot reaches them, if they keep walking, and the points whose speed
+is not known yet (seen by one image only), which the network learns how far to fear.
 """
 
 from __future__ import annotations
@@ -28,18 +29,18 @@ from ..config import ModelDims, SimConfig, world_kind
 from .base import DEFAULT_DIMS, make_spec, mlp
 from .paper import Encoder
 
-#: what the moving-course student's three channels hold (part of its artifact's fingerprint, so a
+#: what the moving-course student's four channels hold (part of its artifact's fingerprint, so a
 #: change of representation retrains it): see :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
 MOVING_INPUTS = (
-    "walking map (fitted-circle motion, two looks averaged); map one step ahead; map at the robot's arrival "
-    "(x / advance steps)"
+    "walking map (tracked fitted circles, weighted line over four looks); map one step ahead; map at the "
+    "robot's arrival (x / advance steps); points seen once"
 )
 
 
 def map_channels(sim: SimConfig) -> int:
-    """Map channels the student reads: 1 (everything seen) on the static course, 3 on the moving one
-    (the walking map now, one step ahead, and at the robot's arrival)."""
-    return 3 if world_kind(sim) == "moving" else 1
+    """Map channels the student reads: 1 (everything seen) on the static course, 4 on the moving one
+    (the walking map now, one step ahead, at the robot's arrival, and its points seen only once)."""
+    return 4 if world_kind(sim) == "moving" else 1
 
 
 class MemoryNet(nn.Module):

@@ -46,7 +46,7 @@ class MemoryPlanner(Planner):
         self.smooth = int(smooth)
         self.channels = map_channels(cfg)
         # the moving course's map walks (its points carry the velocities inferred from successive scans)
-        walks = self.channels == 3
+        walks = self.channels > 1
         self.map = WalkingMap(cfg, mem.map_behind) if walks else EgoMap(DepthScan(cfg), mem.map_behind)
         self._advance = cfg.primitives.advance  # m forward per step, whatever the primitive
         self._library = None
@@ -60,13 +60,15 @@ class MemoryPlanner(Planner):
     def prepare(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Add ``obs`` to the map; return the network's inputs ``(image, map raster)``.
 
-        The raster is ``(cells, cells)``, or ``(3, cells, cells)`` on the moving course, where the
+        The raster is ``(cells, cells)``, or ``(4, cells, cells)`` on the moving course, where the
         map walks (:class:`~husky_course.planners.motion.WalkingMap`: every point carries the
         lateral speed inferred from successive scans, standing still until a second image has
         seen it): the map now, the map one step ahead, then each point where it will be when the
         robot reaches its forward distance ``x``: every primitive advances the same distance per
         step at a constant forward speed, so that is ``x / advance`` steps from now, and the moving
-        course seen this way is a static one (up to the bounces and the cylinders' own width).
+        course seen this way is a static one (up to the bounces and the cylinders' own width);
+        last, the points seen by one image only, whose speed is not known yet (standing still in the
+        other channels): the network learns from its labels how much room they need.
         """
         image = check_observation(obs, self.config.camera.size)
         self.map.add(image)
@@ -75,7 +77,8 @@ class MemoryPlanner(Planner):
         grid = raster(self.map.points, *cells)
         if isinstance(self.map, WalkingMap):
             arrival = self.map.at(np.maximum(self.map.points[:, 0], 0.0) / self._advance)
-            grid = np.stack([grid, raster(self.map.at(1.0), *cells), raster(arrival, *cells)])
+            once = raster(self.map.points[self.map.fresh], *cells)
+            grid = np.stack([grid, raster(self.map.at(1.0), *cells), raster(arrival, *cells), once])
         self.last_input = (image, grid)
         return self.last_input
 

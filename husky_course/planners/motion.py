@@ -1,24 +1,26 @@
 """Lateral motion from successive scans: what a planner on the moving course infers with its memory.
 
-Nothing privileged: the robot keeps the previous image's scan (the points of
-:class:`~husky_course.planners.perception.DepthScan`) and the velocities it estimated for it, moves
-them into the current frame by dead reckoning, and compares them with the current scan.
+Nothing privileged: the robot keeps where it saw each cylinder in the last few images (located from
+the points of :class:`~husky_course.planners.perception.DepthScan`), moves those sightings into the
+current frame by dead reckoning, and compares them with the current scan.
 
 * :func:`segments` cuts a scan (points in column order) into pieces of surface: neighbouring points
   closer than ``gap``, or than ``spacing`` times their forward distance (the camera's columns
-  spread apart with distance), belong to the same piece (a cylinder's visible arc, a stretch of wall);
+  spread apart with distance), belong to the same piece (a cylinder's visible arc, a stretch of
+  wall), and :func:`split_arcs` cuts a piece again where two arcs meet (two cylinders side by side);
 * :func:`piece_centre` locates a piece: a circle fitted to its points, its radius held near the
   course's typical radius, its centre behind the points as seen from the camera (a piece over 1 m
   long is a wall, or several things: its mean). A cylinder's centre moves only with the cylinder,
   where the mean of its visible points also moves as the robot's viewpoint changes which columns
-  hit it; on the tuning worlds the fit's median error on a moving cylinder's step is 0.02 m,
-  the mean's 0.11 m (``benchmarks/exp_moving_tracker.py``);
-* :func:`lateral_velocities` matches each current piece to a previous piece at about the same
-  forward distance (cylinders move only across the course) within one step's walk, the one whose
-  displacement best continues its own estimated velocity, and gives every point of the piece that
-  displacement, averaged with the previous estimate when there is one (a second look halves the
-  noise); 0 where nothing matches (a piece seen for the first time: taken as standing);
-* :class:`MotionMemory` keeps the previous scan and its velocities between decisions;
+  hit it (``benchmarks/exp_moving_tracker.py`` measures both);
+* :class:`Tracks` follows each located piece from image to image: a new piece joins the track
+  whose line it continues, and a track's velocity is the weighted least-squares line through its
+  last four looks (a far cylinder, hit by one or two columns, is placed only to about a column's
+  width; a near one to centimetres). A piece seen for the first time has no velocity yet: it is
+  taken as standing and marked *seen once*;
+* :func:`lateral_velocities` is the two-image version the course used first (match each piece to
+  the previous image's, average with the previous estimate), kept for the comparison;
+* :class:`MotionMemory` keeps the tracks between decisions;
 * :class:`WalkingMap` is the mapping planner's map (:class:`~husky_course.planners.perception.EgoMap`)
   whose points carry those velocities and walk on between images: what both planners of the moving
   course that remember see (the classical :mod:`~husky_course.planners.tracking` and the memory
@@ -44,7 +46,27 @@ def segments(points: np.ndarray, gap: float = 0.3, spacing: float = 0.0) -> list
     limit = np.maximum(gap, spacing * np.maximum(points[:-1, 0], points[1:, 0]))
     starts = np.r_[0, np.flatnonzero(step > limit) + 1]
     ends = np.r_[starts[1:], len(points)]
-    return [np.arange(a, b) for a, b in zip(starts, ends, strict=True)]
+    return [part for a, b in zip(starts, ends, strict=True) for part in split_arcs(points[:, 0], a, b)]
+
+
+def split_arcs(x: np.ndarray, a: int, b: int, prominence: float = 0.03) -> list[np.ndarray]:
+    """Columns ``a:b`` of one piece, cut where two arcs meet.
+
+    A cylinder's visible arc comes nearest the camera in its middle: along the columns its forward
+    distance ``x`` falls, then rises. Where it rises and falls again by more than ``prominence``
+    (a peak between two valleys), two cylinders side by side, or one partly behind the other,
+    joined into one piece: cut after the peak (the first of two equal points). A wall along the
+    course (``x`` rising or falling across the columns) has no such peak and stays whole.
+    """
+    xs = x[a:b]
+    cuts = []
+    for i in range(1, len(xs) - 1):
+        if xs[i] > xs[i - 1] and xs[i] >= xs[i + 1] and min(
+            xs[i] - xs[: i + 1].min(), xs[i] - xs[i:].min()
+        ) > prominence:
+            cuts.append(a + i + 1)
+    edges = [a, *cuts, b]
+    return [np.arange(lo, hi) for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
 
 
 def piece_centre(points: np.ndarray, camera_x: float, radius: float, iterations: int = 8) -> np.ndarray:
@@ -103,11 +125,104 @@ def lateral_velocities(
     return v
 
 
-class MotionMemory:
-    """The previous scan and its velocities, carried between decisions (see the module).
+class Tracks:
+    """Cylinders followed from scan to scan: each piece of surface joins the track it continues.
 
-    :meth:`update` estimates the current scan's velocities and remembers both; :meth:`move` is dead
-    reckoning after a primitive that moved the robot by ``(dx, dy)``.
+    A track keeps its last ``looks`` sightings ``(age, x, y, sigma)`` in the current robot frame
+    (dead reckoning moves them; ``age`` counts steps since the sighting) and its velocity is the
+    weighted least-squares slope of ``y`` against time (weights ``1 / sigma^2``): a far cylinder
+    seen by one or two columns is located only to about a column's width, a near one to
+    centimetres, and a line through every look lets the near ones count most. A new piece joins
+    the track whose prediction for now it lies nearest (greedily, each track and piece once):
+    within ``gate + 2 sigma`` of the track's line when its velocity is known, within one step's
+    walk per step since when it is not (one look only). A track not seen for ``keep`` steps is
+    dropped; a piece over 1 m long (a wall, or several things) is never tracked.
+    """
+
+    def __init__(
+        self, max_step: float, camera_x: float, radius: float, column: float, half_tangent: float,
+        looks: int = 4, keep: int = 2, gate: float = 0.2, x_gate: float = 0.3,
+    ) -> None:
+        self.max_step, self.camera_x, self.radius = max_step, camera_x, radius
+        self.column = column  # the tangent step between two columns
+        self.half_tangent = half_tangent  # the tangent of half the field of view
+        self.looks, self.keep, self.gate, self.x_gate = looks, keep, gate, x_gate
+        self.tracks: list[np.ndarray] = []
+        self.fresh = np.zeros(0, bool)  #: per point of the last scan: its piece was seen for the first time
+
+    def reset(self) -> None:
+        """Forget every track."""
+        self.tracks, self.fresh = [], np.zeros(0, bool)
+
+    def move(self, dx: float, dy: float) -> None:
+        """Dead reckoning: every sighting moves by ``(-dx, -dy)``."""
+        for t in self.tracks:
+            t[:, 1:3] -= (dx, dy)
+
+    @staticmethod
+    def line(track: np.ndarray) -> tuple[float, float]:
+        """``(y now, velocity)`` of a track: its weighted least-squares line (velocity 0 with one look)."""
+        w = 1.0 / track[:, 3] ** 2
+        s, y = -track[:, 0], track[:, 2]
+        if len(track) < 2:
+            return float(y[0]), 0.0
+        sm, ym = np.average(s, weights=w), np.average(y, weights=w)
+        v = float(np.sum(w * (s - sm) * (y - ym)) / np.sum(w * (s - sm) ** 2))
+        return ym - v * sm, v
+
+    def sighting(self, points: np.ndarray) -> np.ndarray:
+        """``(x, y, sigma)`` of a piece: its fitted centre and how well the columns place it across."""
+        cx, cy = piece_centre(points, self.camera_x, self.radius)
+        sigma = 0.02 + 0.5 * self.column * max(cx - self.camera_x, 0.1) / np.sqrt(len(points))
+        u = np.abs(points[:, 1] / np.maximum(points[:, 0] - self.camera_x, 1e-3))
+        if u.max() > self.half_tangent - 1.5 * self.column:  # cut by the edge of the view
+            sigma *= 3.0
+        return np.array([cx, cy, sigma])
+
+    def update(self, pieces: list[np.ndarray], now: np.ndarray) -> np.ndarray:
+        """One image's pieces (index arrays into ``now (m, 2)``): the velocity ``(m,)`` of every point."""
+        v = np.zeros(len(now))
+        for t in self.tracks:
+            t[:, 0] += 1
+        pieces = [idx for idx in pieces if np.ptp(now[idx], axis=0).max() <= 1.0]
+        seen = np.array([self.sighting(now[idx]) for idx in pieces]).reshape(-1, 3)
+        cost = np.full((len(pieces), len(self.tracks)), np.inf)
+        for k, t in enumerate(self.tracks):
+            y = self.line(t)[0]
+            x = np.average(t[:, 1], weights=1.0 / t[:, 3] ** 2)
+            reach = self.gate if len(t) > 1 else self.max_step * t[-1, 0] + 0.1
+            reach = reach + 2 * seen[:, 2]
+            d = np.abs(seen[:, 1] - y)
+            ok = (np.abs(seen[:, 0] - x) < self.x_gate) & (d <= reach)
+            cost[ok, k] = (d[ok] / reach[ok]) ** 2 + ((seen[ok, 0] - x) / self.x_gate) ** 2
+        joined: dict[int, int] = {}
+        for flat in np.argsort(cost, axis=None):
+            i, k = np.unravel_index(flat, cost.shape)
+            if not np.isfinite(cost[i, k]):
+                break
+            if i not in joined and k not in joined.values():
+                joined[int(i)] = int(k)
+        tracks = []
+        self.fresh = np.zeros(len(now), bool)
+        for i, idx in enumerate(pieces):
+            look = np.r_[0.0, seen[i]][None]
+            if i in joined:
+                track = np.concatenate([self.tracks[joined[i]], look])[-self.looks :]
+                v[idx] = self.line(track)[1]
+            else:
+                track = look
+                self.fresh[idx] = True
+            tracks.append(track)
+        lost = [t for k, t in enumerate(self.tracks) if k not in joined.values() and t[-1, 0] < self.keep]
+        self.tracks = tracks + lost
+        return v
+
+
+class MotionMemory:
+    """The tracks of the cylinders seen so far, carried between decisions (see the module).
+
+    :meth:`update` estimates the current scan's velocities (:class:`Tracks`) and remembers the
+    scan; :meth:`move` is dead reckoning after a primitive that moved the robot by ``(dx, dy)``.
     """
 
     def __init__(self, config: SimConfig) -> None:
@@ -115,24 +230,30 @@ class MotionMemory:
         self.max_step = float(getattr(world, "speed_range", (0.0, 0.0))[1])  # the fastest walker, per step
         self.radius = float(np.mean(world.radius_range))
         self.camera_x = cam.mount_forward
-        self.spacing = 1.5 * 2 * np.tan(np.radians(cam.fov_deg) / 2) / cam.size  # 1.5 columns' tangent step
+        half = float(np.tan(np.radians(cam.fov_deg) / 2))
+        self.spacing = 1.5 * 2 * half / cam.size  # 1.5 columns' tangent step
+        self.tracks = Tracks(self.max_step, self.camera_x, self.radius, 2 * half / cam.size, half)
         self.reset()
 
     def reset(self) -> None:
         """Forget (a new episode)."""
         self.previous, self.velocity = np.empty((0, 2)), np.empty(0)
+        self.tracks.reset()
 
     def update(self, now: np.ndarray) -> np.ndarray:
         """Velocities ``(m,)`` of the current scan ``now`` ``(m, 2)``; ``now`` becomes the previous scan."""
-        v = lateral_velocities(
-            self.previous, now, self.max_step, self.velocity, self.camera_x, self.radius, self.spacing
-        )
-        self.previous, self.velocity = np.asarray(now, float)[:, :2].copy(), v
+        now = np.asarray(now, float)[:, :2]
+        if self.max_step > 0:
+            v = self.tracks.update(segments(now, 0.3, self.spacing), now)
+        else:  # the static course: nothing walks
+            v, self.tracks.fresh = np.zeros(len(now)), np.zeros(len(now), bool)
+        self.previous, self.velocity = now.copy(), v
         return v
 
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning: the previous scan moves by ``(-dx, -dy)`` in the robot's new frame."""
         self.previous = self.previous - (dx, dy)
+        self.tracks.move(dx, dy)
 
 
 class WalkingMap:
@@ -149,6 +270,7 @@ class WalkingMap:
         self.map = EgoMap(DepthScan(config), forget_behind)
         self.motion = MotionMemory(config)
         self.velocity = np.empty(0)  #: per point, m per step along y
+        self.fresh = np.zeros(0, bool)  #: per point: its piece was seen once (its velocity unknown)
 
     @property
     def points(self) -> np.ndarray:
@@ -163,13 +285,14 @@ class WalkingMap:
         """Forget everything (a new episode)."""
         self.map.reset()
         self.motion.reset()
-        self.velocity = np.empty(0)
+        self.velocity, self.fresh = np.empty(0), np.zeros(0, bool)
 
     def add(self, obs: np.ndarray) -> np.ndarray:
         """Merge the scan of ``obs``; return its points' velocities (they come first in :attr:`points`)."""
         v = self.motion.update(self.map.scan(obs))
         kept = self.map.add(obs)
         self.velocity = np.concatenate([v, self.velocity[kept]])
+        self.fresh = np.concatenate([self.motion.tracks.fresh, self.fresh[kept]])
         return v
 
     def at(self, t: float | np.ndarray) -> np.ndarray:
@@ -181,6 +304,6 @@ class WalkingMap:
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``, and one step's walk."""
         kept = self.map.move(dx, dy)
-        self.velocity = self.velocity[kept]
+        self.velocity, self.fresh = self.velocity[kept], self.fresh[kept]
         self.map.points[:, 1] += self.velocity
         self.motion.move(dx, dy)

@@ -33,7 +33,7 @@ def memory_fingerprint(profile: Profile) -> dict:
         "sim": to_dict(profile.sim),
         "teacher": {"planner": "oracle", **asdict(OracleConfig())},
     }
-    if map_channels(profile.sim) == 3:  # the moving course's inputs (the static student's key predates this)
+    if map_channels(profile.sim) > 1:  # the moving course's inputs (the static student's key predates this)
         found["inputs"] = MOVING_INPUTS
     return found
 
