@@ -13,21 +13,21 @@ All on the tuning set (evaluation set 1) of the moving course, nothing trained.
    circles followed over four looks, a weighted line through them), the one the planners use.
 2. **What it is worth.** The mapping planner with motion (:mod:`husky_course.planners.tracking`)
    with its own estimate, and with the true velocity of every point it sees (privileged, the
-   ceiling of a perfect estimate for this planner), beside the mapping planner (no motion) and the
-   "seen, with motion" analysis planner (every cylinder seen, exactly) and :class:`SecondLook`, the
-   same with a cylinder's motion known only from its second image on (what reading motion off
-   images could reach with perfect perception); then the horizon sweep of the tracker.
+   ceiling of a perfect estimate for this planner), beside the mapping planner (no motion), the
+   "seen, with motion" analysis planner (every cylinder seen, exactly) and
+   :class:`~husky_course.course.ceiling.SecondLookPlanner`, the same with a cylinder's motion known
+   only from its second image on (what reading motion off images could reach with perfect
+   perception); then the horizon sweep of the tracker.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 
 import numpy as np
 
 from husky_course.config import get_profile, with_world
-from husky_course.course.ceiling import SeenMotionPlanner
+from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate
 from husky_course.planners.base import episode_start
 from husky_course.planners.mapping import MappingPlanner
@@ -36,7 +36,6 @@ from husky_course.planners.oracle import OraclePlanner
 from husky_course.planners.perception import DepthScan
 from husky_course.planners.tracking import TrackingPlanner
 from husky_course.sim.fast import FastSimulator
-from husky_course.sim.lattice import expand
 from husky_course.sim.world import World
 
 
@@ -118,41 +117,6 @@ class TrueMotion(TrackingPlanner):
         return super().act(obs, pose)
 
 
-class SecondLook(SeenMotionPlanner):
-    """Privileged: "seen, with motion", except that a cylinder's motion is known only from its second
-    image on. At first sight it is where it is, taken as standing (``sweep=0``), or (the cautious
-    reading) also at ``sweep`` more places either side, half the fastest walk per step apart,
-    standing. What reading motion off images can reach at best, perception otherwise perfect (an
-    analysis tool)."""
-
-    def __init__(self, sweep: int = 0) -> None:
-        super().__init__()
-        self.sweep = sweep
-        wide = f" (first sight widened by {sweep} half-walks)" if sweep else ""
-        self.name = "seen, motion from the second look" + wide
-
-    def act(self, obs, pose=None):  # type: ignore[no-untyped-def]
-        assert self._eyes is not None and self._eyes.world is not None and pose is not None
-        world, now = self._eyes.world, float(self._time)
-        fresh = set(self._eyes.visible_obstacles(pose, now).tolist()) - self._seen
-        self._seen |= fresh
-        known = np.array(sorted(self._seen), int)
-        obstacles, speeds = world.obstacles[known].copy(), world.speeds[known].copy()
-        first = np.isin(known, sorted(fresh))
-        obstacles[first] = world.obstacles_at(now)[known[first]]  # where it is now, its motion unknown
-        speeds[first] = 0.0
-        if self.sweep and first.any():  # cautious: a row of discs along its possible walk
-            reach = np.arange(-self.sweep, self.sweep + 1) * world.max_speed / 2
-            rows = obstacles[first][:, None].repeat(len(reach), 1)
-            rows[..., 1] += reach
-            obstacles = np.concatenate([obstacles[~first], rows.reshape(-1, 3)])
-            speeds = np.concatenate([speeds[~first], np.zeros(first.sum() * len(reach))])
-        sub = replace(world, obstacles=obstacles, speeds=speeds)
-        steps, pose = max(self._remaining, 1), np.asarray(pose, float)
-        lattice = expand(sub, self._eyes.library, pose, steps, self.oracle.cap, now)
-        return self._choose(lattice)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
@@ -166,7 +130,7 @@ def main() -> None:
     print(f"success on {args.worlds} tuning worlds (evaluation set 1):")
     sim = profile.sim
     planners = [MappingPlanner(sim), TrackingPlanner(sim), TrueMotion(sim), SeenMotionPlanner()]
-    planners += [SecondLook(), SecondLook(sweep=2)]
+    planners += [SecondLookPlanner(), SecondLookPlanner(widen=1), SecondLookPlanner(widen=2)]
     planners += [TrackingPlanner(sim, horizon=h) for h in (3, 4, 6, 8)]
     for planner in planners:
         r = evaluate(planner, args.worlds, 1, config=sim, progress=False, workers=2)

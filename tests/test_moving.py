@@ -321,6 +321,24 @@ def test_ceilings_order_snapshot_below_seen_motion_on_the_moving_course():
     assert still.success_rate == oracle.success_rate
 
 
+def test_second_look_knows_a_cylinders_motion_from_its_second_image():
+    """On the static course it is "seen, with motion" world for world (nothing moves); on the moving
+    course a first sight's motion is unknown to it, so somewhere it chooses differently."""
+    from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner
+
+    def actions(planner, course, seed):  # type: ignore[no-untyped-def]
+        return run_episode(planner, FastSimulator(course.sim), int(seed), course.sim.max_primitives).actions
+
+    static = eval_world_seeds(10, 1)
+    assert all(actions(SecondLookPlanner(), QUICK, s) == actions(SeenMotionPlanner(), QUICK, s)
+               for s in static)
+    moving = eval_world_seeds(20, 1)
+    assert any(actions(SecondLookPlanner(), MOVING, s) != actions(SeenMotionPlanner(), MOVING, s)
+               for s in moving)
+    wide = SecondLookPlanner(widen=1)
+    assert "widened" in wide.name and actions(wide, MOVING, moving[0])
+
+
 def test_tracking_planner_is_mapping_on_static_and_reads_motion_on_moving():
     """The mapping planner with motion: on the static course every velocity is 0 and it chooses as
     the mapping planner does, world for world; on the moving course it crosses clearly more tuning

@@ -87,7 +87,7 @@ def test_only_the_oracle_and_the_analysis_ceilings_are_privileged():
     analysis = {c for c in privileged if not c.__module__.startswith("husky_course.planners")}
     assert all(c.__module__ == ceiling.__name__ for c in analysis)
     public = {c.__name__ for c in analysis if not c.__name__.startswith("_")}
-    assert public == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SnapshotPlanner"}
+    assert public == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SecondLookPlanner", "SnapshotPlanner"}
 
 
 @pytest.mark.parametrize("name", ["random", "heuristic", "lookahead", "rnn", "distilled"])

@@ -13,7 +13,8 @@ The side walls are always known. The gap between the two is what memory can buy;
 Both read the course as it stands at time 0 (the static course).
 
 :class:`SnapshotPlanner` is chapter 10's counterpart on the moving course: every cylinder where it
-is now, none of its motion.
+is now, none of its motion; :class:`SecondLookPlanner` knows a cylinder's motion only from its
+second image on, as a planner reading motion off images must.
 """
 
 from __future__ import annotations
@@ -123,6 +124,45 @@ class SeenMotionPlanner(_Ceiling):
         sub = replace(world, obstacles=world.obstacles[known], speeds=speeds)
         steps, pose = max(self._remaining, 1), np.asarray(pose, float)
         return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, self._time))
+
+
+class SecondLookPlanner(SeenMotionPlanner):
+    """:class:`SeenMotionPlanner`, except that a cylinder's motion is known only from its second image on.
+
+    Privileged, an analysis tool: perception stays perfect (every cylinder seen, exactly where it
+    is), but at first sight a cylinder is taken as standing where it is, as a planner that reads
+    motion off successive images must (one image shows where, not whither). With ``widen`` it is
+    also taken to stand at ``widen`` more places either side, half the fastest walk apart (a
+    cautious reading of a first sight). Against :class:`SeenMotionPlanner` it measures what the
+    first sight's missing motion costs, the part of the gap to the oracle no estimator closes.
+    """
+
+    def __init__(self, widen: int = 0, oracle: OracleConfig | None = None) -> None:
+        super().__init__(oracle)
+        self.widen = int(widen)
+        self.name = "seen so far, motion from its second look" + (
+            f" (first sight widened {widen}x)" if widen else ""
+        )
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._eyes is not None and self._eyes.world is not None and pose is not None
+        world, now = self._eyes.world, float(self._time)
+        new = set(self._eyes.visible_obstacles(pose, now).tolist()) - self._seen
+        self._seen |= new
+        known = np.array(sorted(self._seen), int)
+        first = np.isin(known, sorted(new))
+        obstacles = world.obstacles[known].copy()
+        obstacles[first] = world.obstacles_at(now)[known[first]]  # where it is now, standing
+        speeds = np.zeros(len(known)) if world.speeds is None else np.where(first, 0.0, world.speeds[known])
+        if self.widen and first.any():  # a row of standing discs along where it may walk
+            shifts = np.arange(-self.widen, self.widen + 1) * world.max_speed / 2
+            rows = np.repeat(obstacles[first][:, None], len(shifts), axis=1)
+            rows[..., 1] += shifts
+            obstacles = np.concatenate([obstacles[~first], rows.reshape(-1, 3)])
+            speeds = np.concatenate([speeds[~first], np.zeros(len(rows) * len(shifts))])
+        sub = replace(world, obstacles=obstacles, speeds=speeds)
+        steps, pose = max(self._remaining, 1), np.asarray(pose, float)
+        return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, now))
 
 
 class SnapshotPlanner(_Ceiling):
