@@ -1,0 +1,127 @@
+"""Reading motion off successive depth scans (chapter 10): pieces of surface, fitted circles,
+tracks, and the map whose points walk (``husky_course.planners.motion``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from husky_course.config import get_profile, with_world
+from husky_course.course import exercises
+from husky_course.evaluation.episodes import eval_world_seeds
+from husky_course.sim.fast import FastSimulator
+
+QUICK = get_profile("quick")
+MOVING = with_world(QUICK, "moving")
+
+
+def _arc(centre: tuple[float, float], radius: float) -> np.ndarray:
+    """The scan points a cylinder gives the camera: the columns' rays cut with its circle."""
+    return exercises.cylinder_points(np.array(centre), radius, MOVING.sim)
+
+
+def test_piece_centre_locates_a_cylinder():
+    """The fitted circle finds a cylinder's centre from the few columns that hit it (the points'
+    mean is pulled towards the camera and jumps as the columns change)."""
+    from husky_course.planners.motion import piece_centre
+
+    for cx, cy, r in [(2.0, 0.3, 0.2), (3.0, -0.8, 0.3), (3.0, 1.2, 0.25), (1.6, -1.0, 0.35)]:
+        pts = _arc((cx, cy), r)
+        assert len(pts) >= 2
+        found = piece_centre(pts, MOVING.sim.camera.mount_forward, 0.25)
+        assert abs(found[1] - cy) < 0.05  # across: what motion is read from
+        assert abs(found[0] - cx) < 0.1  # along the ray: off by about the radius prior's error
+        assert np.hypot(*(pts.mean(0) - (cx, cy))) > 0.1  # the mean is off by most of a radius
+
+
+def test_lateral_velocities_from_two_scans():
+    """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step
+    (the columns that hit it differ between the two); standing surfaces at 0; a piece with no match
+    within one step's walk at 0; a second look averages with the first."""
+    from husky_course.planners.motion import MotionMemory, lateral_velocities, segments
+
+    wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
+    far = np.c_[np.full(5, 4.5), np.linspace(-3.0, -2.8, 5)]
+    before = np.concatenate([wall, _arc((3.0, 0.0), 0.3)])
+    arc = _arc((3.0, 0.4), 0.3)
+    after = np.concatenate([wall, arc, far])
+    assert [len(s) for s in segments(after)] == [30, len(arc), 5]
+    m = MotionMemory(MOVING.sim)
+    v = lateral_velocities(before, after, 0.6, camera_x=m.camera_x, radius=m.radius)
+    np.testing.assert_allclose(v[30 : 30 + len(arc)], 0.4, atol=0.03)
+    np.testing.assert_allclose(v[:30], 0.0, atol=1e-12)
+    np.testing.assert_array_equal(v[30 + len(arc) :], 0.0)  # nothing near it before: taken as standing
+    assert (lateral_velocities(before, after, max_step=0.3)[30 : 30 + len(arc)] == 0).all()  # too fast
+    assert (lateral_velocities(np.empty((0, 2)), after, 0.6) == 0).all()
+    # the memory, over three images, the robot standing still: the second look averages
+    assert (m.update(before) == 0).all()
+    np.testing.assert_allclose(m.update(after)[30 : 30 + len(arc)], 0.4, atol=0.03)
+    third = np.concatenate([wall, _arc((3.0, 0.6), 0.3)])
+    np.testing.assert_allclose(m.update(third)[30:], (0.2 + 0.4) / 2, atol=0.03)
+    m.move(1.0, 0.0)
+    np.testing.assert_allclose(m.previous, third - [1.0, 0.0])
+
+
+def test_walking_map_points_walk_on():
+    """The moving course's map: a point keeps its velocity and walks one step per primitive (also
+    where the camera no longer sees it); dead reckoning moves everything by the robot's displacement."""
+    from husky_course.planners.motion import WalkingMap
+
+    sim = FastSimulator(MOVING.sim)
+    world = sim.load(int(eval_world_seeds(1, 1)[0]))
+    walking = WalkingMap(MOVING.sim, forget_behind=1.0)
+    first = walking.add(sim.depth(world.start[None], 0)[0])
+    assert (first == 0).all() and len(walking.points) == len(first)  # one image: nothing known to move
+    walking.velocity[:] = 0.3  # as if every point had been seen walking
+    before = walking.points.copy()
+    np.testing.assert_allclose(walking.at(2.0)[:, 1], before[:, 1] + 0.6)
+    walking.move(1.0, 0.2)
+    kept = before[:, 0] - 1.0 > -1.0
+    np.testing.assert_allclose(walking.points, before[kept] - [1.0, 0.2 - 0.3, 0.0])
+    np.testing.assert_allclose(walking.motion.previous, walking.map.scan(sim.depth(world.start[None], 0)[0])
+                               - [1.0, 0.2])
+
+
+def test_segments_cut_two_cylinders_side_by_side():
+    """Two touching cylinders give one run of close points; the peak of forward distance where
+    their arcs meet cuts it in two. A wall along the course has no such peak and stays whole."""
+    from husky_course.planners.motion import segments
+
+    left, right = _arc((1.6, 0.3), 0.3), _arc((1.6, -0.3), 0.3)
+    assert np.hypot(*(left[-1] - right[0])) < 0.3  # close enough to be one piece by distance alone
+    assert [len(s) for s in segments(np.concatenate([left, right]))] == [len(left), len(right)]
+    wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
+    assert [len(s) for s in segments(wall)] == [30]
+
+
+def test_tracks_fit_a_weighted_line_through_their_looks():
+    """A track's velocity is the weighted least-squares slope of its looks: a far, coarse look
+    counts for little beside two near, precise ones; one look gives no velocity."""
+    from husky_course.planners.motion import Tracks
+
+    looks = np.array([[2.0, 4.0, 0.3, 0.3], [1.0, 3.0, 0.4, 0.02], [0.0, 2.0, 0.8, 0.02]])  # age, x, y, sigma
+    y, v = Tracks.line(looks)
+    assert abs(v - 0.4) < 0.01 and abs(y - 0.8) < 0.01  # the two precise looks' line
+    assert abs(np.polyfit([-2, -1, 0], looks[:, 2], 1)[0] - 0.25) < 1e-9  # unweighted: pulled to 0.25
+    assert Tracks.line(looks[:1]) == (0.3, 0.0)
+
+
+def test_motion_memory_follows_a_walking_cylinder_as_the_robot_drives():
+    """Driving 1 m per step towards a cylinder walking 0.4 m per step across: its first image
+    gives no velocity (its points are marked seen once), later ones the walk; on the static
+    course nothing walks and nothing is new."""
+    from husky_course.planners.motion import MotionMemory
+
+    m = MotionMemory(MOVING.sim)
+    for k in range(3):
+        scan = _arc((4.0 - k, -0.5 + 0.4 * k), 0.3)  # the robot's frame: it drove k metres
+        v = m.update(scan)
+        if k == 0:
+            assert (v == 0).all() and m.tracks.fresh.all()
+        else:
+            np.testing.assert_allclose(v, 0.4, atol=0.05)
+            assert not m.tracks.fresh.any()
+        m.move(1.0, 0.0)
+    still = MotionMemory(QUICK.sim)
+    for k in range(2):
+        assert (still.update(_arc((4.0 - k, 0.4 * k), 0.3)) == 0).all() and not still.tracks.fresh.any()
+        still.move(1.0, 0.0)
