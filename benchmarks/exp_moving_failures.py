@@ -1,0 +1,118 @@
+"""Experiment: where do the moving course's camera-based planners fail, and what did they know?
+
+Run: ``python benchmarks/exp_moving_failures.py [--profile full] [--worlds 200] [--planner tracking|memory]``.
+
+On the tuning set (evaluation set 1) of the moving course. For every episode that ends in a
+collision on a world the oracle crosses, it finds the **fatal decision**: the last step from
+which the true world (every cylinder, its motion) still had a way through, found by the oracle's
+lattice search from the pose and time of that step. It then asks what the planner knew there of
+the cylinder it hit, from its tracks (:class:`husky_course.planners.motion.Tracks`; the tracking
+planner and the moving-trained student keep the same ones):
+
+* *unseen*: no image had rendered it yet;
+* *seen, not in its tracks*: rendered, but no track lies near it (occluded, merged, forgotten);
+* *first sight*: a moving cylinder seen by one image only, so its motion was unknown;
+* *motion read right / wrong*: a moving cylinder with a track whose velocity is within 0.1 m per
+  step of the truth, or not;
+* *standing, tracked*: a standing cylinder the planner had located;
+* *a side wall*, or a world *the oracle finds no way through*.
+
+Printed: the success rate and the failures per kind. What the student would gain from better
+motion estimates is in the first four; the last is the planner's own precision.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections import Counter
+
+import numpy as np
+
+from husky_course.config import get_profile, with_world
+from husky_course.evaluation.episodes import eval_world_seeds
+from husky_course.planners.base import episode_start
+from husky_course.planners.registry import make_planner
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.lattice import expand, rank_plans
+from husky_course.sim.world import World
+
+
+def crossable(sim: FastSimulator, world: World, pose: np.ndarray, t: int, steps: int) -> bool:
+    """Whether the true world still has a way through from ``pose`` at time ``t`` for ``steps`` steps."""
+    lattice = expand(world, sim.library, pose, steps, 0.3, t)
+    return rank_plans(lattice, np.abs(sim.library.offsets), 0.3, 0.05).safe_steps == steps
+
+
+def kind(world: World, j: int, t: int, pose: np.ndarray, first_seen: int | None, tracks: list) -> str:
+    """What the planner knew at step ``t`` of cylinder ``j`` (see the module)."""
+    if first_seen is None or first_seen > t:
+        return "unseen"
+    moving = world.speeds[j] != 0
+    rel = world.obstacles_at(float(t))[j, :2] - pose[:2]
+    near = [(v, looks) for (y, v), x, looks in tracks if abs(x - rel[0]) < 0.4 and abs(y - rel[1]) < 0.4]
+    if not near:
+        return "seen, not in its tracks"
+    v, looks = near[-1]
+    if not moving:
+        return "standing, tracked" if abs(v) < 0.1 else "motion read wrong"
+    if looks == 1:
+        return "first sight"
+    truth = float(world.obstacle_y(np.array([j]), t + 1.0)[0] - world.obstacle_y(np.array([j]), float(t))[0])
+    return "motion read right" if abs(v - truth) < 0.1 else "motion read wrong"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", default="full")
+    parser.add_argument("--worlds", type=int, default=200)
+    parser.add_argument("--planner", default="tracking", choices=("tracking", "memory"))
+    args = parser.parse_args()
+    profile = with_world(get_profile(args.profile), "moving")
+    sim, limit = FastSimulator(profile.sim), profile.sim.max_primitives
+    planner = (make_planner("tracking", config=profile.sim) if args.planner == "tracking"
+               else make_planner("memory", profile=profile))
+    failures: Counter[str] = Counter()
+    successes = 0
+    for seed in eval_world_seeds(args.worlds, 1):
+        world = sim.load(int(seed))
+        pose = world.start.copy()
+        planner.reset(episode_start(planner, sim, int(seed), pose, limit))
+        first: dict[int, int] = {}
+        known: list[tuple[np.ndarray, list]] = []  # per step: the pose, the planner's tracks
+        obs = sim.depth(pose[None])[0]
+        for step in range(limit):
+            for j in sim.visible_obstacles(pose, float(step)).tolist():
+                first.setdefault(j, step)
+            action = planner.act(obs)
+            tracks = planner.map.motion.tracks  # type: ignore[attr-defined]
+            lines = [(tracks.line(t), float(np.average(t[:, 1], weights=t[:, 3] ** -2.0)), len(t))
+                     for t in tracks.tracks]
+            known.append((pose.copy(), lines))
+            result = sim.apply(pose, action, step)
+            planner.observe(action, None)
+            if result.collided:
+                if not crossable(sim, world, world.start.copy(), 0, limit):
+                    failures["the oracle finds no way through"] += 1
+                    break
+                end, f = result.path[-1], len(result.path) / sim.library.local_paths.shape[1]
+                at = world.obstacles_at(step + f)
+                gaps = np.hypot(at[:, 0] - end[0], at[:, 1] - end[1]) - at[:, 2]
+                j = int(np.argmin(gaps))
+                if world.wall_y - abs(end[1]) < gaps[j]:
+                    failures["a side wall"] += 1
+                    break
+                fatal = max(s for s in range(step + 1) if crossable(sim, world, known[s][0], s, limit - s))
+                failures[kind(world, j, fatal, known[fatal][0], first.get(j), known[fatal][1])] += 1
+                break
+            pose = result.pose
+            obs = sim.depth(pose[None], step + 1)[0]
+        else:
+            successes += 1
+    print(f"{planner.name} on {args.worlds} moving tuning worlds: success {successes / args.worlds:.3f}")
+    print("failures by what it knew, at the fatal decision, of the cylinder it hit:")
+    for name, count in failures.most_common():
+        print(f"  {count:4d}  {name}")
+
+
+if __name__ == "__main__":
+    main()
