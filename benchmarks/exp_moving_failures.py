@@ -28,19 +28,19 @@ from collections import Counter
 
 import numpy as np
 
-from husky_course.config import get_profile, with_world
+from husky_course.config import OracleConfig, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.planners.base import episode_start
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
-from husky_course.sim.lattice import expand, rank_plans
+from husky_course.sim.lattice import expand, survival
 from husky_course.sim.world import World
 
 
 def crossable(sim: FastSimulator, world: World, pose: np.ndarray, t: int, steps: int) -> bool:
     """Whether the true world still has a way through from ``pose`` at time ``t`` for ``steps`` steps."""
-    lattice = expand(world, sim.library, pose, steps, 0.3, t)
-    return rank_plans(lattice, np.abs(sim.library.offsets), 0.3, 0.05).safe_steps == steps
+    lattice = expand(world, sim.library, pose, steps, OracleConfig.cap, t)
+    return int(survival(lattice).max()) == steps
 
 
 def kind(world: World, j: int, t: int, pose: np.ndarray, first_seen: int | None, tracks: list) -> str:

@@ -28,6 +28,7 @@ from ..planners.base import EpisodeStart, Planner
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
+from ..sim.world import World
 
 
 class _Ceiling(Planner):
@@ -118,12 +119,17 @@ class SeenMotionPlanner(_Ceiling):
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         assert self._eyes is not None and self._eyes.world is not None and pose is not None
         world = self._eyes.world
-        self._seen |= set(self._eyes.visible_obstacles(pose, float(self._time)).tolist())
+        new = set(self._eyes.visible_obstacles(pose, float(self._time)).tolist()) - self._seen
+        self._seen |= new
         known = np.array(sorted(self._seen), int)
-        speeds = None if world.speeds is None else world.speeds[known]
-        sub = replace(world, obstacles=world.obstacles[known], speeds=speeds)
+        sub = self._known_world(world, known, np.isin(known, sorted(new)))
         steps, pose = max(self._remaining, 1), np.asarray(pose, float)
         return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, self._time))
+
+    def _known_world(self, world: World, known: np.ndarray, first: np.ndarray) -> World:
+        """The world it plans in: cylinders ``known`` (``first``: seen for the first time now), exactly."""
+        speeds = None if world.speeds is None else world.speeds[known]
+        return replace(world, obstacles=world.obstacles[known], speeds=speeds)
 
 
 class SecondLookPlanner(SeenMotionPlanner):
@@ -144,15 +150,11 @@ class SecondLookPlanner(SeenMotionPlanner):
             f" (first sight widened {widen}x)" if widen else ""
         )
 
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        assert self._eyes is not None and self._eyes.world is not None and pose is not None
-        world, now = self._eyes.world, float(self._time)
-        new = set(self._eyes.visible_obstacles(pose, now).tolist()) - self._seen
-        self._seen |= new
-        known = np.array(sorted(self._seen), int)
-        first = np.isin(known, sorted(new))
+    def _known_world(self, world: World, known: np.ndarray, first: np.ndarray) -> World:
+        """As :class:`SeenMotionPlanner`'s, but a first sight stands where it is now (and, with
+        ``widen``, beside it)."""
         obstacles = world.obstacles[known].copy()
-        obstacles[first] = world.obstacles_at(now)[known[first]]  # where it is now, standing
+        obstacles[first] = world.obstacles_at(float(self._time))[known[first]]  # where it is now, standing
         speeds = np.zeros(len(known)) if world.speeds is None else np.where(first, 0.0, world.speeds[known])
         if self.widen and first.any():  # a row of standing discs along where it may walk
             shifts = np.arange(-self.widen, self.widen + 1) * world.max_speed / 2
@@ -160,9 +162,7 @@ class SecondLookPlanner(SeenMotionPlanner):
             rows[..., 1] += shifts
             obstacles = np.concatenate([obstacles[~first], rows.reshape(-1, 3)])
             speeds = np.concatenate([speeds[~first], np.zeros(len(rows) * len(shifts))])
-        sub = replace(world, obstacles=obstacles, speeds=speeds)
-        steps, pose = max(self._remaining, 1), np.asarray(pose, float)
-        return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, now))
+        return replace(world, obstacles=obstacles, speeds=speeds)
 
 
 class SnapshotPlanner(_Ceiling):
