@@ -161,7 +161,11 @@ display(Markdown(
 # only with the cylinder. Each located piece joins a *track*: the sightings of one cylinder in the
 # last four images, moved into the current frame by dead reckoning. Its velocity is the weighted
 # line through them, the near looks (many columns, centimetres) counting more than the far ones (one
-# or two columns, a column's width). A piece seen for the first time has no velocity yet: it is
+# or two columns, a column's width). The robot also knows the course's rule of motion: a cylinder
+# either stands or walks at a speed in a known range. So a velocity that the looks' precision
+# cannot tell from zero as well as from a walk is read as standing (a standing cylinder no longer
+# seems to drift because two coarse looks disagree), and a walk is clipped into the range. A piece
+# seen for the first time has no velocity yet: it is
 # taken as standing until the next image, and marked as *seen once*.
 # `benchmarks/exp_moving_tracker.py` measures the estimate against the truth.
 #

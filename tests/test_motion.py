@@ -105,6 +105,26 @@ def test_tracks_fit_a_weighted_line_through_their_looks():
     assert Tracks.line(looks[:1]) == (0.3, 0.0)
 
 
+def test_tracks_judge_a_slope_against_the_courses_motion_model():
+    """With the motion model (40% walk, at 0.2 to 0.6 m per step), a slope within its error of 0
+    reads as standing, a clear walk as itself, a walk faster than any cylinder's is clipped;
+    without it (or with one look) the slope is the velocity, unjudged."""
+    from husky_course.planners.motion import Tracks
+
+    judge = Tracks(0.6, 0.3, 0.25, 0.02, 0.5, prior=(0.4, 0.2, 0.6))
+    raw = Tracks(0.6, 0.3, 0.25, 0.02, 0.5)
+
+    def track(v: float, sigma: float) -> np.ndarray:  # two looks one step apart: age, x, y, sigma
+        return np.array([[1.0, 3.0, 0.0, sigma], [0.0, 2.0, v, sigma]])
+
+    assert judge.judged(track(0.12, 0.1)) == 0.0  # coarse looks: 0.12 is noise about a standing one
+    assert abs(raw.judged(track(0.12, 0.1)) - 0.12) < 1e-9
+    assert abs(judge.judged(track(0.35, 0.02)) - 0.35) < 1e-9  # precise looks: a walk
+    assert abs(judge.judged(track(-0.12, 0.02)) + 0.2) < 1e-9  # precise, too fast to stand: slowest walk
+    assert abs(judge.judged(track(0.9, 0.05)) - 0.6) < 1e-9  # clipped to the fastest walk
+    assert judge.judged(track(0.3, 0.02)[1:]) == 0.0  # one look: no velocity yet
+
+
 def test_motion_memory_follows_a_walking_cylinder_as_the_robot_drives():
     """Driving 1 m per step towards a cylinder walking 0.4 m per step across: its first image
     gives no velocity (its points are marked seen once), later ones the walk; on the static

@@ -32,8 +32,8 @@ from .paper import Encoder
 #: what the moving-course student's four channels hold (part of its artifact's fingerprint, so a
 #: change of representation retrains it): see :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
 MOVING_INPUTS = (
-    "walking map (tracked fitted circles, weighted line over four looks); map one step ahead; map at the "
-    "robot's arrival (x / advance steps); points seen once"
+    "walking map (tracked fitted circles, weighted line over four looks, judged against the motion "
+    "model); map one step ahead; map at the robot's arrival (x / advance steps); points seen once"
 )
 
 
