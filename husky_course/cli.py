@@ -152,6 +152,7 @@ TRAINABLE = (
     "rnn",
     "distilled",
     "memory",
+    "discs",
     "certificate",
 )
 
@@ -176,6 +177,13 @@ def _train(args: argparse.Namespace) -> dict:
                 "rounds": student.rounds,
                 "path": student.path,
             }
+            continue
+        if name == "discs":  # chapter 8's disc network: simulated views, the planner's own perception
+            from .imitation.discs import get_discs
+
+            _, hist, path = get_discs(profile, progress)
+            out[name] = {"best_val_loss": hist.best_val, "epochs": len(hist.train_loss),
+                         "seconds": round(hist.seconds, 1), "path": path}
             continue
         if name == "certificate":  # chapter 9: the memory student's PAC-Bayes certificate
             from .evaluation.certificate import get_certificate

@@ -61,10 +61,8 @@ WORLD_KINDS = ("static", "moving")
 
 @dataclass(frozen=True)
 class MovingWorldConfig(WorldConfig):
-    """The moving-obstacle course (chapter 10): the static course of the same seed, some cylinders walking
-    across it (along ``y``) at constant speeds and bouncing off the side walls; time counts primitive
-    steps. The model and why: :func:`husky_course.sim.world.make_world`.
-    """
+    """The moving course (chapter 10): the static course of the same seed, some cylinders walking
+    across it (along ``y``), bouncing off the walls; time counts steps (:func:`.sim.world.make_world`)."""
 
     moving_fraction: float = 0.4
     speed_range: tuple[float, float] = (0.2, 0.6)  #: m per step; the robot advances 1 m per step
@@ -232,15 +230,27 @@ class MemoryConfig:
 
 
 @dataclass(frozen=True)
-class GuaranteeConfig:
-    """The PAC-Bayes certificate of chapter 9 (see :mod:`husky_course.evaluation.certificate`).
+class DiscConfig:
+    """The disc planner (chapter 8, :mod:`husky_course.imitation.discs`): its network's training
+    views, ``poses_per_world`` random collision-free decision poses in each of ``worlds`` worlds of
+    collection seed ``collection_seed`` (used by nothing else); ``grow``, ``margin``: tuning set."""
 
-    A Gaussian over the memory student's last layer. Prior: centred on the DAgger weights, deviation
+    collection_seed: int = 4
+    worlds: int = 3_000
+    poses_per_world: int = 8
+    grow: float = 0.0  #: m added to every predicted radius
+    margin: float = 0.0  #: the search's margin (m; the mapping planner's is 0.02)
+    train: TrainConfig = field(default_factory=lambda: TrainConfig(batch_size=256, epochs=40, patience=4))
+
+
+@dataclass(frozen=True)
+class GuaranteeConfig:
+    """Chapter 9's PAC-Bayes certificate (:mod:`husky_course.evaluation.certificate`): a Gaussian over
+    the memory student's last layer. Prior: centred on the DAgger weights, deviation
     ``prior_scale`` times their RMS, fixed before any certificate world is seen. Posterior: fitted on
     ``finetune_worlds`` of the ``worlds`` training worlds (collection ``collection_seed``, used by
     nothing else), certified on all of them, then measured on ``heldout_worlds`` of evaluation set
-    ``heldout_set`` (0 reports the planners, 1 tunes).
-    """
+    ``heldout_set`` (0 reports the planners, 1 tunes)."""
 
     collection_seed: int = 3
     worlds: int = 5_000  #: N, the certificate's training worlds
@@ -279,6 +289,7 @@ class Profile:
     calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
     memory: MemoryConfig = field(default_factory=MemoryConfig)
     guarantee: GuaranteeConfig = field(default_factory=GuaranteeConfig)
+    discs: DiscConfig = field(default_factory=DiscConfig)
 
     @property
     def dims(self) -> ModelDims:
@@ -300,6 +311,7 @@ def _profiles() -> dict[str, Profile]:
             EvalPlan(worlds=60, tuning_worlds=30), calibration=CalibrationConfig(videos=500),
             memory=MemoryConfig(worlds_per_round=300, train=TrainConfig(epochs=10, patience=3)),
             guarantee=GuaranteeConfig(worlds=400, finetune_worlds=150, heldout_worlds=1_000),
+            discs=DiscConfig(worlds=600),
         ),
         "full": Profile("full", sim, DataConfig(videos=10_000)),
     }
@@ -310,12 +322,12 @@ BUILD_MINUTES: dict[str, dict[str, float]] = {
     "quick": {
         "dataset": 0.1, "encoder_decoder": 0.7, "reward_net": 0.1, "safety_image": 0.2, "safety_prim": 0.2,
         "joint": 0.4, "diagnosis": 0.3, "rnn": 0.5, "survival labels": 0.2, "distilled": 0.3, "memory": 2,
-        "certificate": 0.4,
+        "discs": 0.3, "certificate": 0.4,
     },
     "full": {
         "dataset": 0.2, "encoder_decoder": 1.5, "reward_net": 0.4, "safety_image": 0.5, "safety_prim": 0.5,
         "joint": 1.3, "diagnosis": 2, "rnn": 1.6, "survival labels": 0.9, "distilled": 1.1, "memory": 4,
-        "certificate": 2.7,
+        "discs": 1.6, "certificate": 2.7,
     },
 }
 
@@ -358,32 +370,20 @@ def check_profile_name(name: str) -> str:
 
 
 def get_profile(name: str | None = None) -> Profile:
-    """The profile ``name``, or the one ``HUSKY_PROFILE`` names (default ``quick``).
-
-    Call it once, where the user chooses (the CLI, the top of a notebook), and pass the returned
-    :class:`Profile` down: no function below takes a profile name.
-
-    Parameters
-    ----------
-    name : str, optional
-        ``"quick"`` or ``"full"``. When omitted, the environment variable decides.
-    """
+    """The profile ``name`` (``"quick"`` or ``"full"``), or the one ``HUSKY_PROFILE`` names (default
+    ``quick``). Call it once, where the user chooses (the CLI, the top of a notebook), and pass the
+    returned :class:`Profile` down: no function below takes a profile name."""
     if name is None:
         name = os.environ.get(PROFILE_ENV, "quick").strip() or "quick"
     return _profiles()[check_profile_name(name)]
 
 
 def check_profile(profile: object) -> Profile:
-    """Return ``profile`` if it is a :class:`Profile`, else raise :class:`ConfigError`.
-
-    Library functions take the :class:`Profile` itself, resolved once by :func:`get_profile`
-    where the user names it; a name passed further down is a mistake this message explains.
-    """
+    """Return ``profile`` if it is a :class:`Profile`, else raise :class:`ConfigError` (library
+    functions take the :class:`Profile` itself, resolved once by :func:`get_profile`)."""
     if not isinstance(profile, Profile):
-        raise ConfigError(
-            f"expected a Profile, got {profile!r}: resolve the name once with "
-            "husky_course.config.get_profile(name) and pass the result"
-        )
+        raise ConfigError(f"expected a Profile, got {profile!r}: resolve the name once with "
+                          "husky_course.config.get_profile(name) and pass the result")
     return profile
 
 

@@ -40,6 +40,7 @@ from ..config import Profile
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
+from ..training.discs import load_discs
 from ..training.inference import model_device, single_thread
 from ..training.memory import load_memory
 from ..training.trainer import CheckpointError
@@ -199,7 +200,9 @@ class DistilledPlanner(Planner):
 
 
 #: learned planner -> the model it runs on
-MODEL_OF = {"lookahead": "joint", "rnn": "rnn", "distilled": "distilled", "memory": "memory"}
+MODEL_OF = {
+    "lookahead": "joint", "rnn": "rnn", "distilled": "distilled", "memory": "memory", "discs": "discs",
+}
 
 
 def make_learned_planner(
@@ -209,7 +212,8 @@ def make_learned_planner(
 
     With ``train=False`` (the CLI's default) nothing is built: a missing checkpoint is an error
     naming the command that trains it. ``train=True`` builds what is missing (with progress bars),
-    except the memory student, which DAgger trains (:func:`husky_course.imitation.dagger.get_memory`).
+    except the memory student, which DAgger trains (:func:`husky_course.imitation.dagger.get_memory`),
+    and the disc network (:func:`husky_course.imitation.discs.get_discs`).
     """
     check_look_ahead(look_ahead)
     if name not in MODEL_OF:
@@ -219,6 +223,11 @@ def make_learned_planner(
             from .memory import MemoryPlanner
 
             return MemoryPlanner(load_memory(profile)[0], profile.sim, profile.memory, **kwargs)
+        if name == "discs":  # trained on simulated views read by the planner's perception: only loaded here
+            from .discs import DiscPlanner
+
+            settings = {"grow": profile.discs.grow, "margin": profile.discs.margin, **kwargs}
+            return DiscPlanner(load_discs(profile)[0], profile.sim, **settings)
         if train:
             model = builders.BUILDERS[MODEL_OF[name]](profile, True).model
         else:

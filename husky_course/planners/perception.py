@@ -82,11 +82,13 @@ class EgoMap:
         """Forget everything (a new episode)."""
         self.points = np.empty((0, 3))
 
-    def add(self, obs: np.ndarray) -> np.ndarray:
+    def add(self, obs: np.ndarray, use: np.ndarray | None = None) -> np.ndarray:
         """Merge the scan of ``obs`` into the map (see the class docstring).
 
-        Returns which of the points held before were kept (a boolean mask over them): the new
-        scan's points come first in :attr:`points`, then the kept ones, in their order.
+        ``use`` (a boolean mask over the image's columns) limits which columns' points join the
+        map (default: every column that sees something); every column still clears what it sees
+        again or sees through. Returns which of the points held before were kept (a boolean mask
+        over them): the new scan's points come first in :attr:`points`, then the kept ones, in order.
         """
         cam = self.scan.camera
         d = self.scan.columns(obs)
@@ -101,7 +103,7 @@ class EgoMap:
             seen_again = in_view & (dx < d[np.clip(j, 0, cam.size - 1)] + self.points[:, 2] + 0.05)
             kept = ~seen_again
             self.points = self.points[kept]
-        seen = np.isfinite(d)
+        seen = np.isfinite(d) if use is None else np.isfinite(d) & use
         ds, us = d[seen], self.scan.u[seen]
         new = np.stack([cam.mount_forward + ds, ds * us, ds * self._half_gap], axis=1)
         self.points = np.concatenate([new, self.points])

@@ -15,8 +15,11 @@ from .mapping import MappingPlanner
 from .oracle import OraclePlanner
 from .tracking import TrackingPlanner
 
-PLANNERS = ("random", "heuristic", "mapping", "tracking", "lookahead", "rnn", "distilled", "memory", "oracle")
-LEARNED_PLANNERS = ("lookahead", "rnn", "distilled", "memory")
+PLANNERS = (
+    "random", "heuristic", "mapping", "tracking", "lookahead", "rnn", "distilled", "memory", "discs",
+    "oracle",
+)
+LEARNED_PLANNERS = ("lookahead", "rnn", "distilled", "memory", "discs")
 _CLASSES: dict[str, type[Planner]] = {
     "random": RandomPlanner,
     "heuristic": HeuristicPlanner,
