@@ -231,15 +231,15 @@ class MemoryConfig:
 
 @dataclass(frozen=True)
 class DiscConfig:
-    """The disc planner (chapter 8, :mod:`husky_course.imitation.discs`): its network's training
-    views, ``poses_per_world`` random collision-free decision poses in each of ``worlds`` worlds of
-    collection seed ``collection_seed`` (used by nothing else); ``grow``, ``margin``: tuning set."""
+    """Chapter 8's disc planner: its net's views (:mod:`husky_course.imitation.discs`: random poses in
+    training worlds of a seed nothing else uses) and its settings (chosen on the tuning set)."""
 
     collection_seed: int = 4
     worlds: int = 3_000
     poses_per_world: int = 8
     grow: float = 0.0  #: m added to every predicted radius
     margin: float = 0.0  #: the search's margin (m; the mapping planner's is 0.02)
+    unexplained: float = 0.05  #: a cylinder piece's points further than this (m) from its disc stay points
     train: TrainConfig = field(default_factory=lambda: TrainConfig(batch_size=256, epochs=40, patience=4))
 
 

@@ -88,15 +88,15 @@ def test_bad_observations_raise(sim, name):
 
 def test_registry_errors(monkeypatch):
     everything = {"random", "heuristic", "mapping", "tracking", "lookahead", "rnn", "distilled", "memory",
-                  "oracle"}
+                  "discs", "oracle"}
     assert set(PLANNERS) == everything
-    names = "random, heuristic, mapping, tracking, lookahead, rnn, distilled, memory, oracle"
+    names = "random, heuristic, mapping, tracking, lookahead, rnn, distilled, memory, discs, oracle"
     with pytest.raises(PlannerError, match=f"choose one of {names}"):
         make_planner("astar")
     assert issubclass(PlannerError, ValueError)
     with pytest.raises(PlannerError, match="bad arguments"):
         make_planner("heuristic", look_ahead=2)
-    for name in ("lookahead", "rnn", "distilled", "memory"):
+    for name in ("lookahead", "rnn", "distilled", "memory", "discs"):
         with pytest.raises(PlannerError, match="is learned: pass profile="):
             make_planner(name, look_ahead=1)
     monkeypatch.setitem(sys.modules, "husky_course.planners.learned", None)  # module unavailable

@@ -9,10 +9,12 @@ import torch
 
 from husky_course.course import ceiling
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+from husky_course.models.discs import DiscNet
 from husky_course.models.rnn import RNNLookahead
 from husky_course.models.safety import JointModel, SurvivalNet
 from husky_course.planners import base, classic, learned, oracle
 from husky_course.planners.base import EpisodeStart, Planner, episode_key
+from husky_course.planners.discs import DiscPlanner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.backends import make_simulator
 
@@ -87,10 +89,11 @@ def test_only_the_oracle_and_the_analysis_ceilings_are_privileged():
     analysis = {c for c in privileged if not c.__module__.startswith("husky_course.planners")}
     assert all(c.__module__ == ceiling.__name__ for c in analysis)
     public = {c.__name__ for c in analysis if not c.__name__.startswith("_")}
-    assert public == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SecondLookPlanner", "SnapshotPlanner"}
+    assert public == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SecondLookPlanner", "SnapshotPlanner",
+                      "TrueDiscsPlanner"}
 
 
-@pytest.mark.parametrize("name", ["random", "heuristic", "lookahead", "rnn", "distilled"])
+@pytest.mark.parametrize("name", ["random", "heuristic", "lookahead", "rnn", "distilled", "discs"])
 def test_every_unprivileged_planner_runs_without_the_world(sim, name):
     """A whole episode with the simulator hidden from the planner (it is only stepped by run_episode)."""
     torch.manual_seed(0)
@@ -98,6 +101,7 @@ def test_every_unprivileged_planner_runs_without_the_world(sim, name):
         "lookahead": learned.LookaheadPlanner(JointModel(), 1),
         "rnn": learned.RNNPlanner(RNNLookahead(), 1),
         "distilled": learned.DistilledPlanner(SurvivalNet()),
+        "discs": DiscPlanner(DiscNet((0.15, 0.35))),
     }
     planner = models.get(name) or make_planner(name)
     assert not planner.privileged

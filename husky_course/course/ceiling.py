@@ -1,4 +1,4 @@
-"""Where is the ceiling of a planner that sees only what the camera has shown? (chapter 8)
+"""Reference planners with perfect perception of what the camera has shown (chapters 8 and 10).
 
 :class:`SeenObstaclesPlanner` is an *analysis* tool, privileged on purpose: it replans at every
 step with the oracle's exact lattice search, but over only some obstacles, with their true
@@ -8,13 +8,20 @@ geometry (perfect perception):
   (:meth:`~husky_course.sim.fast.FastSimulator.visible_obstacles`);
 * ``memory=True``: every obstacle any image so far has rendered.
 
-The side walls are always known. The gap between the two is what memory can buy; the gap between
-``memory=True`` and the oracle (every obstacle, seen or not) is what no camera-based planner can.
-Both read the course as it stands at time 0 (the static course).
+The side walls are always known. The gap between the two is what memory buys a planner that
+perceives perfectly; the gap between ``memory=True`` and the oracle (every obstacle, seen or not)
+is what the unseen costs a planner that takes unseen space as free. They are references, not
+ceilings: a camera-based planner that is cautious about unseen space is bounded by neither (only
+the oracle bounds every planner). Both read the course as it stands at time 0 (the static course).
 
 :class:`SnapshotPlanner` is chapter 10's counterpart on the moving course: every cylinder where it
 is now, none of its motion; :class:`SecondLookPlanner` knows a cylinder's motion only from its
 second image on, as a planner reading motion off images must.
+
+:class:`TrueDiscsPlanner` is the disc planner (:mod:`~husky_course.planners.discs`) with its
+network replaced by the truth: each piece of a scan read as the cylinder most of its columns hit,
+exactly (walls stay scan points). Against the disc planner it measures what the network's errors
+cost; against "seen so far", what the disc map's own rules cost (chapter 8's ladder).
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ import numpy as np
 
 from ..config import OracleConfig
 from ..planners.base import EpisodeStart, Planner
+from ..planners.discs import DiscMap, DiscPlanner
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
@@ -97,7 +105,8 @@ class SeenObstaclesPlanner(_Ceiling):
 class SeenMotionPlanner(_Ceiling):
     """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
 
-    Privileged, an analysis tool: the ceiling of a camera-based planner on the moving course. Every
+    Privileged, an analysis tool: a reference for a camera-based planner on the moving course (not a
+    bound: it takes unseen space, and a first sight's future, as known or free). Every
     cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
     from then on; the others are unknown. Against the oracle, it measures what the camera never
     shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
@@ -182,3 +191,52 @@ class SnapshotPlanner(_Ceiling):
         now = world.obstacles_at(float(self._time))  # a frozen copy: positions at this step, no speeds
         check = disc_check(now, world.wall_y, world.config.robot_radius, self.oracle.cap)
         return self._choose_frozen(check, pose)
+
+
+class _TrueReading(DiscMap):
+    """A :class:`~husky_course.planners.discs.DiscMap` whose pieces are read from the truth."""
+
+    eyes: FastSimulator
+    pose: np.ndarray
+
+    def read(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        d, cols, pts, pieces = self.reader.pieces(obs)
+        kind = self.eyes.column_hits(self.pose[None])[1][0]
+        other, discs = np.zeros(len(d), bool), []
+        for idx in pieces:
+            ids, counts = np.unique(kind[cols[idx]], return_counts=True)
+            top = int(ids[np.argmax(counts)])
+            if top >= 2 and counts.max() * 2 > len(idx):  # the cylinder most of its columns hit
+                ox, oy, r = self.eyes.world.obstacles[top - 2]  # type: ignore[union-attr]
+                c, s = np.cos(self.pose[2]), np.sin(self.pose[2])
+                dx, dy = ox - self.pose[0], oy - self.pose[1]
+                discs.append([c * dx + s * dy, -s * dx + c * dy, r])
+            else:
+                other[cols[idx]] = True
+        return d, np.array(discs, float).reshape(-1, 3), other
+
+
+class TrueDiscsPlanner(DiscPlanner):
+    """The disc planner reading every piece from the truth (module docstring). Privileged, static
+    course only: an analysis tool, never a candidate."""
+
+    privileged = True
+    name = "discs, read from the truth (privileged)"
+
+    def __init__(self, config=None, **kwargs) -> None:
+        from ..models.discs import DiscNet  # an untrained net: the map's reader is replaced
+
+        cfg = config or FastSimulator().config
+        super().__init__(DiscNet(cfg.world.radius_range), cfg, unexplained=np.inf, **kwargs)
+        self.map.__class__ = _TrueReading
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        if start.sim is None or start.sim.world is None:
+            raise RuntimeError("TrueDiscsPlanner is privileged: run it with run_episode")
+        self.map.eyes = FastSimulator(start.sim.config)  # type: ignore[attr-defined]
+        self.map.eyes.load(start.sim.world)  # type: ignore[attr-defined]
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        self.map.pose = np.asarray(pose, float)  # type: ignore[attr-defined]
+        return super().act(obs, pose)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ..config import Profile
+from ..config import Profile, with_world
 from ..data.collect import world_seed_for
 from ..data.io import atomic_save_npz, load_npz
 from ..data.store import runs_dir
@@ -95,7 +95,9 @@ def _tensors(data: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, torch.T
 
 
 def get_discs(profile: Profile, progress: bool = True) -> tuple[DiscNet, History, str]:
-    """The trained disc network ``(model, history, path)``, built first if it is missing."""
+    """The trained disc network ``(model, history, path)``, built first if it is missing (always on
+    the static course's views: :func:`~husky_course.training.discs.disc_fingerprint`)."""
+    profile = with_world(profile, "static")
     run = disc_dir(profile)
     if not (run / "model.pt").is_file():
         announce_build("discs", profile.name, "train discs")

@@ -30,8 +30,9 @@ import numpy as np
 from ..config import SimConfig
 from ..models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
 from .mapping import MappingPlanner
-from .motion import segments
+from .motion import MotionMemory, segments
 from .perception import DepthScan, EgoMap
+from .tracking import TrackingPlanner
 
 
 class PieceReader:
@@ -119,8 +120,12 @@ class DiscMap:
     * :meth:`move`: dead reckoning, as the mapping planner's map.
     """
 
-    def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8) -> None:
+    def __init__(
+        self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
+        unexplained: float = 0.05,
+    ) -> None:
         cfg = config or SimConfig()
+        self.unexplained = float(unexplained)
         self.reader = PieceReader(cfg)
         self.walls = EgoMap(self.reader.scan, forget_behind)
         self.forward = _NumpyMLP(model)
@@ -141,23 +146,38 @@ class DiscMap:
         """``(d, discs (k, 3), other (size,))`` of one image: its per-column depth, the discs its
         cylinder pieces predict, and which columns belong to the other pieces (walls)."""
         d, cols, pts, pieces = self.reader.pieces(obs)
+        discs, cyl, other = self.decode(d, cols, pts, pieces)
+        return d, discs[cyl], other
+
+    def decode(
+        self, d: np.ndarray, cols: np.ndarray, pts: np.ndarray, pieces: list[np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The network on an image's pieces (:meth:`PieceReader.pieces`): ``(disc per piece (n, 3),
+        cylinder (n,) bool, other (size,) bool)``, ``other`` marking the columns that stay scan points."""
         if not pieces:
-            return d, np.empty((0, 3)), np.zeros(len(d), bool)
+            return np.empty((0, 3)), np.zeros(0, bool), np.zeros(len(d), bool)
         feats, frames = zip(*(self.reader.features(pts[i], cols[i], d) for i in pieces), strict=True)
         logit, offset, radius = self.forward(np.stack(feats))
         frames_a = np.stack(frames)
         centres = frames_a[:, 0] + offset[:, :1] * frames_a[:, 1] + offset[:, 1:] * frames_a[:, 2]
         cyl = logit > 0
         other = np.zeros(len(d), bool)
-        for i, is_cyl in zip(pieces, cyl, strict=True):
-            if not is_cyl:
-                other[cols[i]] = True
-        return d, np.c_[centres, radius][cyl], other
+        for k, i in enumerate(pieces):
+            # a wall's columns, and the points a cylinder's disc leaves unexplained, stay scan points
+            off = np.hypot(*(pts[i] - centres[k]).T) - radius[k]
+            other[cols[i]] = ~cyl[k] | (np.abs(off) > self.unexplained)
+        return np.c_[centres, radius], cyl, other
 
     def add(self, obs: np.ndarray) -> None:
         """Merge the image ``obs`` into the map (see the class docstring)."""
         d, new, other = self.read(obs)
+        self._merge(obs, d, new, other)
+
+    def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
+        """Drop the remembered discs ``obs`` sees again or through, or that a new disc lands on, then add
+        ``new`` (first) and the ``other`` columns' points; returns which remembered discs were kept."""
         cam, reader = self.reader.camera, self.reader
+        kept = np.ones(len(self.discs), bool)
         if len(self.discs):
             x, y, r = self.discs.T
             dx = x - cam.mount_forward
@@ -169,15 +189,73 @@ class DiscMap:
             if len(new):
                 gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])
                 seen_again |= (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
-            self.discs = self.discs[~seen_again]
-        self.discs = np.concatenate([new, self.discs])
+            kept = ~seen_again
+        self.discs = np.concatenate([new, self.discs[kept]])
         self.walls.add(obs, use=other)
+        return kept
 
-    def move(self, dx: float, dy: float) -> None:
-        """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``."""
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``; returns which discs
+        were kept (those not further behind than ``forget_behind``)."""
         self.walls.move(dx, dy)
         moved = self.discs - np.array([dx, dy, 0.0])
-        self.discs = moved[moved[:, 0] > -self.forget_behind]
+        kept = moved[:, 0] > -self.forget_behind
+        self.discs = moved[kept]
+        return kept
+
+
+class WalkingDiscMap(DiscMap):
+    """A :class:`DiscMap` whose discs walk (the moving course, chapter 10).
+
+    Each new disc carries the lateral velocity of its piece, read off successive scans by the
+    tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's
+    points; 0 for a first sight, taken as standing until the next image); after every step a
+    remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
+    course every velocity is 0 and it is the :class:`DiscMap`.
+    """
+
+    def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
+                 unexplained: float = 0.05, widen: float = 0.0) -> None:
+        super().__init__(model, config, forget_behind, unexplained)
+        self.motion = MotionMemory(config or SimConfig())
+        self.widen = float(widen)
+        self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
+
+    def reset(self) -> None:
+        super().reset()
+        self.motion.reset()
+        self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
+
+    @property
+    def points(self) -> np.ndarray:
+        """Discs, then (with ``widen``) a standing copy of every first-sight disc ``widen`` m to each
+        side (where it may have walked by the time the robot passes), then wall points."""
+        first = self.discs[self.fresh] if self.widen > 0 else np.empty((0, 3))
+        side = [first + (0.0, s * self.widen, 0.0) for s in (-1, 1)]
+        return np.concatenate([self.discs, *side, self.walls.points])
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Per point of :attr:`points`: the discs' velocities (m per step along ``y``), then 0."""
+        return np.r_[self.speeds, np.zeros(len(self.points) - len(self.speeds))]
+
+    def add(self, obs: np.ndarray) -> None:
+        d, cols, pts, pieces = self.reader.pieces(obs)
+        v = self.motion.update(pts)
+        fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
+        discs, cyl, other = self.decode(d, cols, pts, pieces)
+        speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
+        first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
+        kept = self._merge(obs, d, discs[cyl], other)
+        self.speeds = np.r_[speed[cyl], self.speeds[kept]]
+        self.fresh = np.r_[first[cyl], self.fresh[kept]]
+
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        kept = super().move(dx, dy)
+        self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
+        self.discs[:, 1] += self.speeds
+        self.motion.move(dx, dy)
+        return kept
 
 
 class DiscPlanner(MappingPlanner):
@@ -189,10 +267,13 @@ class DiscPlanner(MappingPlanner):
 
     name = "discs"
 
-    def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0, **kwargs) -> None:
+    def __init__(
+        self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0, unexplained: float = 0.05,
+        **kwargs: float,
+    ) -> None:
         super().__init__(config, **kwargs)
         self.model, self.grow = model.eval(), float(grow)
-        self.map = DiscMap(model, self.config, self.map.forget_behind)  # type: ignore[assignment]
+        self.map = DiscMap(model, self.config, self.map.forget_behind, unexplained)  # type: ignore[assignment]
 
     @property
     def points(self) -> np.ndarray:
@@ -200,3 +281,24 @@ class DiscPlanner(MappingPlanner):
         pts = self.map.points.copy()
         pts[: len(self.map.discs), 2] += self.grow  # type: ignore[attr-defined]
         return pts
+
+
+class DiscTrackingPlanner(DiscPlanner):
+    """The disc planner on the moving course: its discs walk (:class:`WalkingDiscMap`), and it plans
+    in space-time exactly as the tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`)
+    does over its walking points: standing things on the clearance grid, each walking disc where it
+    is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
+
+    name = "discs"
+    plan = TrackingPlanner.plan
+
+    def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
+                 unexplained: float = 0.05, widen: float = 0.0, **kwargs: float) -> None:
+        super().__init__(model, config, grow, unexplained, **kwargs)
+        self.map = WalkingDiscMap(  # type: ignore[assignment]
+            model, self.config, self.map.forget_behind, unexplained, widen)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Each point's lateral velocity (m per step): the discs' estimates, 0 for walls."""
+        return self.map.velocity  # type: ignore[attr-defined]

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from ..config import Profile
+from ..config import Profile, world_kind
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
@@ -224,10 +224,13 @@ def make_learned_planner(
 
             return MemoryPlanner(load_memory(profile)[0], profile.sim, profile.memory, **kwargs)
         if name == "discs":  # trained on simulated views read by the planner's perception: only loaded here
-            from .discs import DiscPlanner
+            from .discs import DiscPlanner, DiscTrackingPlanner
 
-            settings = {"grow": profile.discs.grow, "margin": profile.discs.margin, **kwargs}
-            return DiscPlanner(load_discs(profile)[0], profile.sim, **settings)
+            d = profile.discs
+            config = kwargs.pop("config", profile.sim)  # the course it runs on: discs walk on the moving one
+            settings = {"grow": d.grow, "margin": d.margin, "unexplained": d.unexplained, **kwargs}
+            cls = DiscTrackingPlanner if world_kind(config) == "moving" else DiscPlanner
+            return cls(load_discs(profile)[0], config, **settings)
         if train:
             model = builders.BUILDERS[MODEL_OF[name]](profile, True).model
         else:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import torch
 
-from ..config import Profile, to_dict
+from ..config import Profile, to_dict, with_world
 from ..data.store import model_dir
 from ..models.discs import PIECE_FEATURES, DiscNet
 from .trainer import CheckpointError, History, load_model
@@ -25,9 +25,15 @@ def new_disc_net(profile: Profile) -> DiscNet:
 
 
 def disc_fingerprint(profile: Profile) -> dict:
-    """What determines the disc network: its spec, its views and labels, the simulator."""
+    """What determines the disc network: its spec, its views and labels, the simulator.
+
+    One network serves both courses: it reads the geometry of one image, and the moving course at
+    time 0 is the static course of the same seed, so it is always the static course's (a profile of
+    either course names the same artifact).
+    """
+    profile = with_world(profile, "static")
     cfg = profile.discs
-    views = {k: v for k, v in to_dict(cfg).items() if k not in ("grow", "train")}
+    views = {k: v for k, v in to_dict(cfg).items() if k in ("collection_seed", "worlds", "poses_per_world")}
     return {"model": new_disc_net(profile).spec.to_dict(), "views": views, "features": PIECE_FEATURES,
             "sim": to_dict(profile.sim)}
 
@@ -42,8 +48,8 @@ def load_discs(profile: Profile) -> tuple[DiscNet, History, str]:
     path = disc_dir(profile) / "model.pt"
     if not path.is_file():
         raise CheckpointError(
-            f"no trained disc network for profile {profile.name!r} (expected {path}); "
-            f"train it with `python -m husky_course train discs --profile {profile.name}`"
+            f"no trained disc network for profile {profile.name!r} (expected {path}); train it with "
+            f"`python -m husky_course train discs --profile {profile.name}`"
         )
     model = new_disc_net(profile)
     history = load_model(path, model, {**disc_fingerprint(profile), "train": asdict(profile.discs.train)})
