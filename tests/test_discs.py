@@ -171,3 +171,33 @@ def test_the_disc_planner_crosses_more_worlds_than_the_mapping_planner(trained):
     """The strongest ordering 200 quick worlds support: more successes than the classical planner over
     its raw scan points (their intervals overlap at this size; the full profile's tables in chapter 8)."""
     assert trained["discs"].success_rate > trained["mapping"].success_rate
+
+
+def _first_move(planner, sim: FastSimulator, world: World) -> int:
+    from husky_course.planners.base import episode_start
+
+    sim.load(world)
+    planner.reset(episode_start(planner, sim, world.seed, world.start, sim.config.max_primitives))
+    return planner.act(sim.depth(world.start[None])[0], world.start.copy())
+
+
+def test_references_that_know_only_what_images_showed_ignore_a_hidden_cylinder():
+    """A world whose unrendered cylinder changes the oracle's first move: the references that claim to
+    use only rendered cylinders (perfect perception of the seen; discs read from the truth) make the
+    same first move with it and without it."""
+    from dataclasses import replace
+
+    from husky_course.course.ceiling import SeenObstaclesPlanner
+    from husky_course.planners.oracle import OraclePlanner
+
+    sim = FastSimulator(QUICK.sim)
+    for seed in eval_world_seeds(40, TEST_SET):
+        world = sim.load(int(seed))
+        hidden = sorted(set(range(len(world.obstacles))) - set(sim.visible_obstacles(world.start).tolist()))
+        for i in hidden:
+            without = replace(world, obstacles=np.delete(world.obstacles, i, axis=0))
+            if _first_move(OraclePlanner(), sim, world) != _first_move(OraclePlanner(), sim, without):
+                for reference in (SeenObstaclesPlanner(memory=True), TrueDiscsPlanner(QUICK.sim)):
+                    assert _first_move(reference, sim, world) == _first_move(reference, sim, without)
+                return
+    pytest.fail("no world of the test set has a hidden cylinder that changes the oracle's first move")
