@@ -194,7 +194,10 @@ for x, y, r in first.obstacles:
     ax.add_patch(plt.Circle((x - first.start[0], y - first.start[1]), r, color="0.75"))
 for x, y, r in read_discs:
     ax.add_patch(plt.Circle((x, y), r, fill=False, color="tab:orange", lw=2))
-ax.plot(scan_points[:, 0], scan_points[:, 1], "k.", ms=3)
+ax.plot(scan_points[:, 0], scan_points[:, 1], "k.", ms=3, label="scan points")
+ax.plot([], [], "o", mfc="none", mec="tab:orange", mew=2, label="discs the network reads")
+ax.plot([], [], "o", color="0.75", label="true cylinders")
+ax.legend(fontsize=7, loc="lower left")
 ax.set_xlim(-0.5, profile.sim.camera.far + 1)
 ax.set_ylim(-3.5, 3.5)
 ax.set_aspect("equal")
