@@ -32,7 +32,7 @@ import numpy as np
 
 from ..config import OracleConfig
 from ..planners.base import EpisodeStart, Planner
-from ..planners.discs import DiscMap, DiscPlanner
+from ..planners.discs import DiscMap, DiscPlanner, majority_cylinder
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
@@ -204,10 +204,9 @@ class _TrueReading(DiscMap):
         kind = self.eyes.column_hits(self.pose[None])[1][0]
         other, discs = np.zeros(len(d), bool), []
         for idx in pieces:
-            ids, counts = np.unique(kind[cols[idx]], return_counts=True)
-            top = int(ids[np.argmax(counts)])
-            if top >= 2 and counts.max() * 2 > len(idx):  # the cylinder most of its columns hit
-                ox, oy, r = self.eyes.world.obstacles[top - 2]  # type: ignore[union-attr]
+            hit = majority_cylinder(kind[cols[idx]])
+            if hit >= 0:  # the cylinder most of its columns hit
+                ox, oy, r = self.eyes.world.obstacles[hit]  # type: ignore[union-attr]
                 c, s = np.cos(self.pose[2]), np.sin(self.pose[2])
                 dx, dy = ox - self.pose[0], oy - self.pose[1]
                 discs.append([c * dx + s * dy, -s * dx + c * dy, r])

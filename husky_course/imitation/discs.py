@@ -28,7 +28,7 @@ from ..data.collect import world_seed_for
 from ..data.io import atomic_save_npz, load_npz
 from ..data.store import runs_dir
 from ..models.discs import DiscNet
-from ..planners.discs import PieceReader
+from ..planners.discs import PieceReader, majority_cylinder
 from ..progress import announce_build, tqdm
 from ..sim.fast import FastSimulator
 from ..training.discs import disc_dir, disc_fingerprint, new_disc_net
@@ -67,13 +67,11 @@ def piece_views(profile: Profile, progress: bool = True) -> dict[str, np.ndarray
             d, cols, pts, pieces = reader.pieces(image)
             for idx in pieces:
                 feats, (mean, ray, across) = reader.features(pts[idx], cols[idx], d)
-                hits = kind[cols[idx]]
-                ids, counts = np.unique(hits, return_counts=True)
-                top = int(ids[np.argmax(counts)])
-                cyl = top >= 2 and counts.max() * 2 > len(hits)
+                hit = majority_cylinder(kind[cols[idx]])
+                cyl = hit >= 0
                 centre, radius = np.zeros(2), 0.0
                 if cyl:
-                    ox, oy, radius = world.obstacles[top - 2]
+                    ox, oy, radius = world.obstacles[hit]
                     rel = np.array([ox, oy]) - pose[:2] - mean  # robot frame = world shifted (heading 0)
                     centre = np.array([rel @ ray, rel @ across])
                 out["features"].append(feats)

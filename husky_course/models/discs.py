@@ -4,7 +4,7 @@ A depth scan shows a cylinder as an arc of points: its front, often cut by the e
 or by a nearer cylinder, sampled by a handful of columns. The classical mapping planner keeps those
 points as they are; chapter 8 measures that a planner which knows the whole cylinder behind every
 arc it has seen does better. This network reads one piece of surface
-(:func:`husky_course.planners.discs.piece_features`: its points resampled to a fixed number, in a
+(:meth:`husky_course.planners.discs.PieceReader.features`: its points resampled to a fixed number, in a
 frame that looks from the camera at the piece, and how the piece lies in the image) and predicts
 
 * whether it is part of a cylinder (a logit; otherwise a stretch of wall), and

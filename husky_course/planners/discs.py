@@ -14,7 +14,7 @@ This planner learns that step. Every image:
 1. the scan (:class:`~husky_course.planners.perception.DepthScan`) is cut into pieces of surface
    (:func:`~husky_course.planners.motion.segments`, the tracker's own cut);
 2. each piece goes through :class:`~husky_course.models.discs.DiscNet` (its features:
-   :func:`piece_features`), which says whether it belongs to a cylinder and, if so, where the
+   :meth:`PieceReader.features`), which says whether it belongs to a cylinder and, if so, where the
    cylinder's centre is and how large it is;
 3. the map (:class:`DiscMap`) keeps those discs, and as scan points the other pieces (walls) and
    the points of a cylinder's piece that its disc leaves unexplained (further than
@@ -103,6 +103,16 @@ class PieceReader:
             glob += [float(inside and not seen), step]
         assert len(glob) == PIECE_GLOBALS
         return np.r_[res.reshape(-1), glob].astype(np.float32), np.stack([mean, ray, across])
+
+
+def majority_cylinder(hits: np.ndarray) -> int:
+    """The cylinder most of a piece's columns hit (index into the world's obstacles), or -1 when no
+    cylinder has a strict majority (a wall's piece, or one split between surfaces). ``hits`` are the
+    columns' kinds from :meth:`~husky_course.sim.fast.FastSimulator.column_hits` (``2 + i``: cylinder
+    ``i``). The label the disc network learns, and what the truth-reading reference reads."""
+    ids, counts = np.unique(hits, return_counts=True)
+    top = int(ids[np.argmax(counts)])
+    return top - 2 if top >= 2 and counts.max() * 2 > len(hits) else -1
 
 
 class _NumpyMLP:
