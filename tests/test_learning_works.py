@@ -1,24 +1,46 @@
 """Tests that fail if learning breaks: the quick profile's trained planners, on 200 held-out worlds.
 
 They load the checkpoints ``make test`` trains before running pytest (``train all``); they never
-train. Evaluation set 3 is used, the tests' own: not the book's reporting set (0), the tuning set
-(1) or the certificate's held-out set (2).
+train. A missing checkpoint is a failure whose message names the commands that build it, never a
+skip: a plain ``pytest`` must not pass without checking any behaviour. Evaluation set 3 is used, the
+tests' own: not the book's reporting set (0), the tuning set (1) or the certificate's held-out set
+(2).
 """
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
-from husky_course.config import get_profile
+from husky_course.config import Profile, get_profile, with_world
+from husky_course.data.store import ARTIFACTS_ENV
 from husky_course.evaluation.episodes import evaluate
-from husky_course.planners.base import PlannerError
+from husky_course.planners.base import Planner, PlannerError
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
 QUICK = get_profile("quick")
 WORLDS, EVAL_SET = 200, 3
+BUILD = ("`python -m husky_course train all --profile quick` (and, for chapter 10's student, "
+         "`python -m husky_course train memory --world moving --profile quick`)")
+
+
+def trained(name: str, profile: Profile = QUICK) -> Planner:
+    """The learned planner ``name`` from its stored checkpoints, or a test failure naming the command."""
+    try:
+        return make_planner(name, profile=profile)
+    except PlannerError as exc:
+        pytest.fail(f"the quick profile's trained {name!r} planner is missing ({exc}); build the "
+                    f"checkpoints with {BUILD}, or run `make test`, which does it first", pytrace=False)
+
+
+def test_a_missing_checkpoint_fails_with_the_command_that_builds_it(tmp_path, monkeypatch):
+    monkeypatch.setenv(ARTIFACTS_ENV, str(tmp_path))  # an empty artifact store
+    for name, profile, command in (("lookahead", QUICK, "train joint --profile quick`"),
+                                   ("memory", with_world(QUICK, "moving"),
+                                    "train memory --profile quick --world moving`")):
+        with pytest.raises(pytest.fail.Exception) as failure:
+            trained(name, profile)
+        assert command in str(failure.value) and "train all --profile quick" in str(failure.value)
 
 
 @pytest.fixture(scope="module")
@@ -27,13 +49,7 @@ def results():
     out = {name: evaluate(make_planner(name), WORLDS, EVAL_SET, sim=sim, progress=False)
            for name in ("random", "heuristic")}
     for name in ("lookahead", "rnn", "distilled", "memory"):
-        try:
-            planner = make_planner(name, profile=QUICK)
-        except PlannerError as exc:
-            if os.environ.get("CI"):
-                raise
-            pytest.skip(f"quick checkpoints missing ({exc}); `make test` trains them first")
-        out[name] = evaluate(planner, WORLDS, EVAL_SET, sim=sim, progress=False)
+        out[name] = evaluate(trained(name), WORLDS, EVAL_SET, sim=sim, progress=False)
     return out
 
 

@@ -289,7 +289,34 @@ def test_second_look_knows_a_cylinders_motion_from_its_second_image():
     assert any(actions(SecondLookPlanner(), MOVING, s) != actions(SeenMotionPlanner(), MOVING, s)
                for s in moving)
     wide = SecondLookPlanner(widen=1)
-    assert "widened" in wide.name and actions(wide, MOVING, moving[0])
+    assert "widened" in wide.name
+    assert any(actions(wide, MOVING, s) != actions(SecondLookPlanner(), MOVING, s) for s in moving)
+
+
+def test_widening_replaces_each_first_sight_by_a_standing_row_and_leaves_the_rest():
+    """What ``widen`` changes in the world the second look plans in: each cylinder seen for the first
+    time becomes ``2 * widen + 1`` standing copies, half the fastest walk apart across the course;
+    every cylinder seen before keeps its place and its motion."""
+    from husky_course.course.ceiling import SecondLookPlanner
+
+    world = make_world(5, MOVING.sim.world)
+    known = np.arange(len(world.obstacles))
+    first = np.isin(known, world.moving[:2]) | (known == int(np.flatnonzero(world.speeds == 0)[0]))
+    plain, wide = SecondLookPlanner(), SecondLookPlanner(widen=2)
+    plain._time = wide._time = 3
+    seen, widened = plain._known_world(world, known, first), wide._known_world(world, known, first)
+    now = world.obstacles_at(3.0)
+    np.testing.assert_array_equal(seen.obstacles[first], now[first])  # a first sight stands where it is
+    assert not seen.speeds[first].any() and seen.speeds[~first].tolist() == world.speeds[~first].tolist()
+    rest = int((~first).sum())
+    np.testing.assert_array_equal(widened.obstacles[:rest], seen.obstacles[~first])
+    np.testing.assert_array_equal(widened.speeds[:rest], seen.speeds[~first])
+    rows = widened.obstacles[rest:].reshape(int(first.sum()), 5, 3)
+    assert len(widened.obstacles) == rest + 5 * first.sum() and not widened.speeds[rest:].any()
+    step = world.max_speed / 2
+    for row, disc in zip(rows, now[first], strict=True):
+        np.testing.assert_allclose(row[:, 1] - disc[1], np.arange(-2, 3) * step)
+        np.testing.assert_array_equal(row[:, [0, 2]], np.repeat(disc[None, [0, 2]], 5, axis=0))
 
 
 def test_tracking_planner_is_mapping_on_static_and_reads_motion_on_moving():
