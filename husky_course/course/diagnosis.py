@@ -263,6 +263,16 @@ def unsafe_frame_errors(
     return out
 
 
+MIN_AUC = 0.6  #: a classifier with a smaller ROC AUC has not learned (see :func:`failed`)
+MIN_MARGIN = 0.02  #: nor one whose accuracy beats the majority-class rate by no more than this
+
+
+def failed(q: Classification) -> bool:
+    """Chapter 4's criterion for a classifier that did not learn: AUC below :data:`MIN_AUC`, or an
+    accuracy at most :data:`MIN_MARGIN` above the majority-class rate."""
+    return q.auc < MIN_AUC or q.accuracy <= q.majority + MIN_MARGIN
+
+
 def variant_table(results: list[VariantResult]) -> list[dict]:
     """Rows for a results table, faithful first."""
     return [r.row() for r in results]
