@@ -10,13 +10,92 @@ import math
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import CameraConfig, SimConfig
 from ..data.dataset import Dataset
 
 
 def _ok(message: str) -> bool:
     print(f"correct: {message}")
     return True
+
+
+def check_ray_factor(camera: CameraConfig, factor: float) -> bool:
+    """Chapter 1, exercise 2: distance along the ray over depth, for the pixel farthest off-centre.
+
+    Right within 0.1%: ``sqrt(1 + u**2 + v**2)`` for the corner pixel's tangents ``u, v``
+    (:func:`~husky_course.sim.camera.pixel_tangents`).
+    """
+    from ..sim.camera import pixel_tangents
+
+    u, v = pixel_tangents(camera)
+    want = float(np.sqrt(1.0 + np.max(u**2) + np.max(v**2)))
+    got = float(factor)
+    if not math.isclose(got, want, rel_tol=1e-3):
+        edge = float(np.sqrt(1.0 + np.max(u**2)))
+        hint = (
+            "the distance along a ray is never shorter than the depth: the factor is at least 1" if got < 1
+            else "that is the factor at the middle of a side; a corner's ray leans in both u and v"
+            if math.isclose(got, edge, rel_tol=1e-3)
+            else "the ray (1, u, v) has length sqrt(1 + u^2 + v^2) per metre of depth"
+        )
+        raise AssertionError(f"{got:.4f} is not it: {hint}")
+    return _ok(f"at a corner the ray is {want:.3f} times as long as the depth ({camera.fov_deg:.0f} deg)")
+
+
+def naive_crossings(ds: Dataset) -> int:
+    """Pairs ``(i, i + 1)`` with label 0 at ``i`` and ``i + 1`` in the pool whose images are of two videos."""
+    i = np.flatnonzero(np.asarray(ds.labels[:-1]) == 0)
+    return int((ds.episode[i + 1] != ds.episode[i]).sum())
+
+
+def check_naive_pairs(ds: Dataset, count: int) -> bool:
+    """Chapter 2, exercise 2: how many naive pairs ``(i, i + 1)`` (label 0) cross into the next video."""
+    want = naive_crossings(ds)
+    if int(count) != want:
+        survived = int(np.asarray(ds.collided).size - np.asarray(ds.collided).sum())
+        hint = (
+            "a video that ends in a collision ends on a label-1 image, which the filter drops; count the "
+            f"videos that end without one ({survived} in this pool, the last one has no next image)"
+        )
+        raise AssertionError(f"{count} is not it (pairs crossing into the next video): {hint}")
+    return _ok(f"{want} of the naive pairs join the last image of one video to the first of the next")
+
+
+def check_encoder_features(size: int, n: int) -> bool:
+    """Chapter 3, exercise 4: how many numbers the encoder's fully connected layer gets from a
+    ``size x size`` image (read from the paper's :class:`~husky_course.models.paper.Encoder` built
+    at that size)."""
+    from dataclasses import replace
+
+    from ..models.base import DEFAULT_DIMS
+    from ..models.paper import Encoder
+
+    want = Encoder(replace(DEFAULT_DIMS, image_size=int(size))).fc.in_features
+    if int(n) != want:
+        raise AssertionError(
+            f"{n} is not it: each convolution gives (side - kernel) // stride + 1 pixels a side "
+            "(kernel 10 then 8, stride 2), and the second has 16 channels"
+        )
+    return _ok(f"a {size}x{size} image reaches the fully connected layer as {want} numbers")
+
+
+def check_roc_auc(y: np.ndarray, p: np.ndarray, auc: float) -> bool:
+    """Chapter 5, exercise 4: the ROC AUC of probabilities ``p`` for labels ``y``, to 1e-6."""
+    from ..evaluation.metrics import roc_auc
+
+    want, got = roc_auc(y, p), float(auc)
+    if not math.isclose(got, want, abs_tol=1e-6):
+        accuracy = float(((np.asarray(p) >= 0.5) == np.asarray(y, bool)).mean())
+        hint = (
+            "that is the AUC with safe images ranked above colliding ones: 1 minus the answer"
+            if math.isclose(got, 1 - want, abs_tol=1e-6) else
+            "that is the accuracy at threshold 0.5, not the AUC" if math.isclose(got, accuracy, abs_tol=1e-6)
+            else "the share of (colliding, safe) pairs in which the colliding image has the higher "
+            "probability; a tie counts one half"
+        )
+        raise AssertionError(f"{got:.6f} is not the AUC: {hint}")
+    n_pos = int(np.sum(y))
+    return _ok(f"ROC AUC {want:.4f} over {n_pos} colliding and {int(np.size(y)) - n_pos} safe images")
 
 
 def check_shifted_labels(ds: Dataset, labels: np.ndarray) -> bool:
