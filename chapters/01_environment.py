@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.data.store import get_dataset
 from husky_course.sim.backends import make_simulator
 from husky_course.ui import plotting, widgets
@@ -96,12 +97,13 @@ ax.set_xlabel("field of view (deg)")
 ax.set_ylabel("hit obstacles in view (%)")
 plt.show()
 print(f"With 90 deg the robot sees {vis[90]:.0%} of what its next primitive could hit; "
-      f"with our {cam.fov_deg:.0f} deg (the lab's own choice) it sees {vis[cam.fov_deg]:.0%}.")
+      f"with the configured {cam.fov_deg:.0f} deg it sees {vis[cam.fov_deg]:.0%}.")
 
 # %% [markdown]
-# The rest are beside the camera, hidden behind nearer obstacles or beyond the far plane. A much
-# wider field of view stretches the perspective image badly at its edges, so the configured one
-# (printed above) is our compromise.
+# The rest are beside the camera, hidden behind nearer obstacles or beyond the far plane. Since the
+# paper gives no field of view, the configured one (printed above) is our choice, and a compromise:
+# a narrower one misses more of what the next primitive could hit, and a much wider one stretches
+# the perspective image badly at its edges.
 #
 # ## The 25 motion primitives
 #
@@ -173,8 +175,10 @@ env.close()
 #
 # 1. Change `default_seed` in the explorer. Find a world where the start is boxed in: which
 #    primitives could still be safe?
-# 2. The depth along the view axis differs from the distance along the ray. For a pixel in the
-#    image's corner (the configured field of view), by what factor? *(Hint: the ray direction is
-#    `(1, u, v)`; check with `husky_course.sim.camera.pixel_tangents`.)*
+# 2. The depth along the view axis differs from the distance along the ray. For the pixel in the
+#    image's corner (the one farthest from its centre, at the configured field of view), by what
+#    factor is the distance along its ray larger than its depth? *(Hint: the ray direction is
+#    `(1, u, v)`, with `u, v` from `husky_course.sim.camera.pixel_tangents(cfg.camera)`.)* Check
+#    with `exercises.check_ray_factor(cfg.camera, your_factor)`.
 # 3. Re-run the field-of-view measurement with `fovs = [90, 130]` and a robot radius of 0.3 m
 #    (`dataclasses.replace`). Does the gap between the two grow or shrink? Why?

@@ -19,8 +19,11 @@ import numpy as np
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
+from husky_course.data.calibration import best_range, calibrate, mean_interval
 from husky_course.data.collect import collect
 from husky_course.data.dataset import load_dataset, stats
+from husky_course.data.policies import POLICIES, policy_lengths, policy_videos
 from husky_course.data.splits import encoder_decoder_pairs, reward_set
 from husky_course.data.store import dataset_dir, get_dataset
 from husky_course.sim.backends import make_simulator
@@ -78,8 +81,6 @@ print(f"{s['videos']} videos, {s['images']} images; mean {s['mean_primitives_per
 # is rendered and the sweep takes seconds. The other choices of the course are printed below it.
 
 # %%
-from husky_course.data.calibration import best_range, calibrate
-
 rows = calibrate(profile.sim, profile.calibration, progress=False)
 display(Markdown(markdown_table([r.row() for r in rows])))
 best = best_range(rows, profile.calibration.target)
@@ -92,6 +93,76 @@ w, prim = profile.sim.world, profile.sim.primitives
 print(f"also fixed in the config: obstacles only beyond x = {w.obstacle_x_min} m (a start zone), "
       f"start y uniform in ±{w.start_half_width} m, primitives advancing {prim.advance} m with lateral "
       f"offsets up to ±{prim.lateral_spread} m, a robot collision cylinder of radius {w.robot_radius} m.")
+
+# %% [markdown]
+# ## Two readings of "a policy with random weights"
+#
+# The paper's videos come from "a policy with random weights (used to randomly determine which
+# primitive to apply at each step)", in its introduction "a policy based on the PAC-Bayes framework
+# that uses a set of random weights". Our dataset reads this as **uniform**: each primitive drawn
+# independently and uniformly, whatever the image shows. The words allow a second reading, the
+# **random network**: a network with freshly drawn weights looks at each depth image and applies the
+# primitive it scores highest, as the lab's PAC-Bayes planners draw a policy's weights and then act
+# on the image. For it we take the paper's encoder (image → 15 numbers) and one fully connected
+# layer to 25 scores, initialised by PyTorch's default rule, one fresh network per video (seeded by
+# the video; the head is our choice, since none of the paper's networks outputs a primitive).
+#
+# Both readings drive in the same worlds, those of the dataset's first videos, and we count
+# primitives as above (the colliding one included, at most the paper's 10). Since a world is shared,
+# the difference between the two readings is also measured world by world (a paired interval).
+
+# %%
+n_pol = policy_videos(profile)
+played = {name: policy_lengths(profile.sim, name, n_pol, profile.data.seed) for name in POLICIES}
+summary, single, table = {}, {}, []
+for name, (lengths, prims) in played.items():
+    summary[name] = mean_interval(lengths)
+    single[name] = np.mean([len(np.unique(p)) == 1 for p in prims if len(p) >= 2])  # one manoeuvre repeated
+    table.append({"reading": name, "videos": n_pol, "mean primitives per video": f"{summary[name][0]:.2f}",
+                  "95% interval": f"[{summary[name][1]:.2f}, {summary[name][2]:.2f}]",
+                  "videos of 2+ primitives repeating one primitive": f"{single[name]:.0%}"})
+display(Markdown(markdown_table(table)))
+fig, ax = plt.subplots(figsize=(6, 3))
+bins = np.arange(0.5, profile.sim.max_primitives + 1.5)
+for k, (name, (lengths, _)) in enumerate(played.items()):
+    ax.hist(lengths, bins=bins + 0.2 * k - 0.1, rwidth=0.4, label=name)
+ax.set_xlabel("primitives per video")
+ax.set_ylabel("videos")
+ax.legend()
+plt.show()
+uniform_lengths, network_lengths = played["uniform"][0], played["random network"][0]
+if len(ds.lengths) >= n_pol:
+    print("the uniform reading replays the dataset's first videos exactly:",
+          bool(np.array_equal(uniform_lengths, ds.lengths[:n_pol])))
+
+# %%
+(mu_u, lo_u, hi_u), (mu_n, lo_n, hi_n) = summary["uniform"], summary["random network"]
+d, d_lo, d_hi = mean_interval(network_lengths - uniform_lengths)
+target = profile.calibration.target
+inside = {name: lo <= target <= hi for name, (_, lo, hi) in summary.items()}
+overlap = lo_u <= hi_n and lo_n <= hi_u
+print(f"uniform: {mu_u:.2f} [{lo_u:.2f}, {hi_u:.2f}]; random network: {mu_n:.2f} [{lo_n:.2f}, {hi_n:.2f}] "
+      f"primitives per video over {n_pol} videos each; the two intervals "
+      f"{'overlap' if overlap else 'do not overlap'}.")
+print(f"world by world, random network minus uniform: {d:+.2f} [{d_lo:+.2f}, {d_hi:+.2f}]: "
+      + ("the two readings give different video lengths on these worlds." if d_lo > 0 or d_hi < 0 else
+         "these videos cannot tell the two readings apart by their length."))
+print(f"the paper's {target} lies "
+      + " and ".join(f"{'inside' if inside[n] else 'outside'} the {n} reading's interval" for n in POLICIES)
+      + (": its one number does not decide between them." if all(inside.values()) else "."))
+
+# %%
+print(f"Length is not all that differs: of the videos of at least 2 primitives, {single['random network']:.0%} "
+      f"apply one and the same primitive at every step under the random network, {single['uniform']:.0%} under "
+      "the uniform policy"
+      + ("; a freshly initialised network's highest score often stays on the same primitive from one image "
+         "to the next, so its videos show the decoder fewer different primitives per world."
+         if single["random network"] > single["uniform"] else "."))
+
+# %% [markdown]
+# The course keeps the uniform reading: the paper's parenthesis ("used to randomly determine which
+# primitive to apply at each step") describes it most directly, and the obstacle radii were calibrated
+# on it.
 
 # %% [markdown]
 # ## The single-indexed pool and the −1 convention
@@ -201,7 +272,8 @@ print(f"at these rates the paper's 44,000 images take {44_000 * t_ref / len(rows
 #
 # 1. Collect 200 videos with `backend="pybullet"` and the same seed as a fast collection. Are the
 #    safety labels identical? How much longer did it take?
-# 2. Write the naive pairing `(i, i+1) for every i with label 0` and count how many of its pairs
-#    cross from one video to the next. What would the decoder learn from them?
+# 2. Write the naive pairing `(i, i+1) for every i with label 0` (and `i+1` still in the pool) and
+#    count how many of its pairs cross from one video to the next. Check your count with
+#    `exercises.check_naive_pairs(ds, your_count)`. What would the decoder learn from them?
 # 3. The reward set keeps half of the safe images. What ratio would you get by keeping all of them,
 #    and how would a classifier that always answers "safe" score on each?

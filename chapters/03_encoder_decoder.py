@@ -21,6 +21,7 @@ import torch
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.data.collect import fresh_pairs
 from husky_course.data.splits import encoder_decoder_pairs
 from husky_course.data.store import get_dataset
@@ -197,3 +198,6 @@ plt.show()
 #    becomes 40). Does the validation loss improve? Why might one number be enough here?
 # 3. Which pixels does the decoder get most wrong? Average `|pred - true|` over the validation set
 #    and show it as an image. Explain the pattern using the camera geometry of chapter 1.
+# 4. *Sizes through the encoder.* With a 64 × 64 camera, how many numbers would the encoder's fully
+#    connected layer receive? Work it out with `(side − kernel) // stride + 1` per convolution, then
+#    check with `exercises.check_encoder_features(64, your_n)`.

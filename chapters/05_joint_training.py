@@ -21,6 +21,7 @@ import torch
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.data import splits
 from husky_course.data.labels import primitive_outcomes
 from husky_course.data.splits import encoder_decoder_pairs, reward_set
@@ -156,3 +157,6 @@ display(Markdown(
 #    model ranks worst (lowest per-primitive AUC). Where are they in the library, and why?
 # 3. Our joint model is trained on the applied primitive only. Write a loss that uses all 25
 #    simulator labels per image. What does that assume about how the data was collected?
+# 4. *ROC AUC by hand.* Compute the joint model's AUC on the validation reward set (`y` and `p_joint`
+#    above) as the share of (colliding, safe) image pairs in which the colliding image gets the higher
+#    probability, a tie counting one half. Check with `exercises.check_roc_auc(y, p_joint, your_auc)`.

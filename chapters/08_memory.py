@@ -29,6 +29,7 @@ import numpy as np
 from IPython.display import HTML, Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.course.ceiling import SeenObstaclesPlanner
 from husky_course.course.ladder import static_ladder
 from husky_course.evaluation.analysis import collision_cause

@@ -26,6 +26,7 @@ import numpy as np
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.evaluation.certificate import get_certificate
 from husky_course.evaluation.pac_bayes import (
     bernoulli_kl,
