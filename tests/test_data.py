@@ -151,3 +151,45 @@ def test_bad_inputs_are_clear_and_lose_nothing(tmp_path, small_dataset_dir, caps
     assert cli_main(["stats", str(small_dataset_dir), "--json"]) == 0
     printed = json.loads(capsys.readouterr().out)
     assert printed["videos"] == 120
+
+
+def test_uniform_policy_replays_the_collection(small_dataset_dir):
+    from husky_course.data.policies import policy_lengths
+
+    ds = load_dataset(small_dataset_dir)  # collection seed 3, 120 videos
+    lengths, played = policy_lengths(QUICK.sim, "uniform", 40, 3)
+    np.testing.assert_array_equal(lengths, ds.lengths[:40])
+    for v, prims in enumerate(played):
+        np.testing.assert_array_equal(prims, ds.applied[ds.video(v)])
+
+
+def test_random_network_policy_is_seeded_and_stops_at_a_collision():
+    import torch
+
+    from husky_course.data.collect import world_seed_for
+    from husky_course.data.policies import play_network_video, policy_lengths, random_network
+    from husky_course.sim.fast import FastSimulator
+
+    state = torch.random.get_rng_state()
+    lengths, played = policy_lengths(QUICK.sim, "random network", 12, 3)
+    assert torch.equal(torch.random.get_rng_state(), state)  # the global torch stream is left alone
+    again, played_again = policy_lengths(QUICK.sim, "random network", 12, 3)
+    np.testing.assert_array_equal(lengths, again)
+    assert all(np.array_equal(a, b) for a, b in zip(played, played_again, strict=True))
+    assert ((lengths >= 1) & (lengths <= QUICK.sim.max_primitives)).all()
+    sim = FastSimulator(QUICK.sim)
+    for v, prims in enumerate(played):
+        world = sim.load(world_seed_for(3, v))
+        net = random_network(QUICK.sim, 3, v)
+        with torch.no_grad():  # the first choice is the fresh network's argmax on the start image
+            first = int(net(torch.from_numpy(sim.depth(world.start[None]).astype(np.float32)))[0].argmax())
+        assert prims[0] == first
+        pose, hits = world.start.copy(), []
+        for step, a in enumerate(prims):
+            result = sim.apply(pose, int(a), step)
+            hits.append(result.collided)
+            pose = result.pose
+        assert not any(hits[:-1]) and (hits[-1] or len(prims) == QUICK.sim.max_primitives)
+    np.testing.assert_array_equal(play_network_video(sim, 3, 5, QUICK.sim.max_primitives), played[5])
+    with pytest.raises(ValueError, match="unknown policy"):
+        policy_lengths(QUICK.sim, "softmax", 3, 3)
