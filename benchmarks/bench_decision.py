@@ -1,12 +1,14 @@
 """Decision time of Algorithm 1 (batched vs a naive loop) and of the planners with memory.
 
-Run: ``python benchmarks/bench_decision.py [--profile quick] [--look-ahead 3] [--repeats 200]``.
+Run: ``python benchmarks/bench_decision.py [--profile quick] [--look-ahead 3] [--repeats 200]
+[--episodes 20]``.
 
 Times one decision of ``lookahead`` (25 primitives, ``look_ahead`` = 3) with the library's batched
 implementation and with the line-by-line reference (one decoder and encoder call per primitive),
 for both readings of the reward line, and prints milliseconds and the speed-up. Then times one
 decision of the distilled planner, the mapping planner and the memory student, side by side, along
-a real episode's images (the memory planners' maps grow as they go). Uses trained checkpoints if
+a real episode's images (the memory planners' maps grow as they go), on ``--episodes`` worlds of the
+tuning set (evaluation set ``EvalPlan.tuning_seed``). Uses trained checkpoints if
 the profile has them, otherwise seeded untrained models (same cost).
 """
 
@@ -38,6 +40,7 @@ def main() -> None:
     parser.add_argument("--profile", default="quick")
     parser.add_argument("--look-ahead", type=int, default=3)
     parser.add_argument("--repeats", type=int, default=200)
+    parser.add_argument("--episodes", type=int, default=20, help="tuning-set episodes to decide along")
     args = parser.parse_args()
     try:
         from husky_course.training import builders
@@ -59,11 +62,11 @@ def main() -> None:
             f"  reward={reward:10s} batched {fast:7.2f} ms   naive loop {slow:8.2f} ms"
             f"   speed-up {slow / fast:5.1f}x"
         )
-    decisions(get_profile(args.profile))
+    decisions(get_profile(args.profile), args.episodes)
 
 
-def decisions(profile) -> None:
-    """ms per decision of the distilled, mapping and memory planners along one episode's images."""
+def decisions(profile, episodes: int = 20) -> None:
+    """ms per decision of the distilled, mapping and memory planners along ``episodes`` tuning episodes."""
     from husky_course.evaluation.episodes import eval_world_seeds, run_episode
     from husky_course.models.safety import SurvivalNet
     from husky_course.planners.learned import DistilledPlanner
@@ -82,9 +85,11 @@ def decisions(profile) -> None:
             planners[name] = DistilledPlanner(net) if name == "distilled" else MemoryPlanner(net, profile.sim)
     planners["mapping"] = make_planner("mapping", config=profile.sim)
     sim = FastSimulator(profile.sim)
-    print("one decision, single thread, over 20 held-out episodes:")
+    seed = profile.eval.tuning_seed
+    print(f"one decision, single thread, over {episodes} episodes of evaluation set {seed} (tuning):")
     for name, planner in planners.items():
-        times = [t for s in eval_world_seeds(20, 1) for t in run_episode(planner, sim, int(s)).decision_times]
+        seeds = eval_world_seeds(episodes, seed)
+        times = [t for s in seeds for t in run_episode(planner, sim, int(s)).decision_times]
         mean, worst = 1e3 * float(np.mean(times)), 1e3 * float(np.max(times))
         print(f"  {name:10s} {mean:7.2f} ms mean   {worst:7.2f} ms max")
 

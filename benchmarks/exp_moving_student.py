@@ -1,6 +1,8 @@
 """Experiment: how much of the moving-course student's shortfall is its motion estimate?
 
-Run: ``python benchmarks/exp_moving_student.py [--profile quick] [--eval-worlds 200]``.
+Run: ``python benchmarks/exp_moving_student.py [--profile quick] [--eval-worlds 200] [--rounds N]
+[--worlds-per-round N] [--epochs N]`` (the last three change the privileged student's recipe only:
+a smoke run, no longer like for like).
 
 Trains, in a separate artifact store (``--store``, default ``/tmp/husky-exp-moving``), the moving-course
 memory student by the same DAgger recipe, but with a privileged motion estimate: every point of the
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from dataclasses import replace
 
 import numpy as np
 
@@ -29,6 +32,9 @@ def main() -> None:
     parser.add_argument("--profile", default="quick")
     parser.add_argument("--eval-worlds", type=int, default=200)
     parser.add_argument("--store", default="/tmp/husky-exp-moving")
+    parser.add_argument("--rounds", type=int)
+    parser.add_argument("--worlds-per-round", type=int)
+    parser.add_argument("--epochs", type=int)
     args = parser.parse_args()
     course_store = os.environ.get("HUSKY_ARTIFACTS")
 
@@ -37,6 +43,12 @@ def main() -> None:
     from husky_course.planners.registry import make_planner
 
     profile = with_world(get_profile(args.profile), "moving")
+    mem = profile.memory
+    changes = {k: v for k, v in (("rounds", args.rounds), ("worlds_per_round", args.worlds_per_round)) if v}
+    mem = replace(mem, **changes)
+    if args.epochs is not None:
+        mem = replace(mem, train=replace(mem.train, epochs=args.epochs))
+    variant = replace(profile, memory=mem)
     ours = evaluate(make_planner("memory", profile=profile), args.eval_worlds, 1, config=profile.sim,
                     progress=False, workers=2)
 
@@ -71,6 +83,7 @@ def main() -> None:
         on = gap[np.arange(len(nearest)), nearest] < 0.05
         self.previous = np.asarray(now, float)[:, :2].copy()
         self.velocity = np.where(on, world.speeds[nearest], 0.0)
+        self.tracks.fresh = np.zeros(len(at), bool)  # the truth: no point's motion is unknown
         return self.velocity
 
     FastSimulator.load = traced_load
@@ -80,15 +93,15 @@ def main() -> None:
     os.environ[store.ARTIFACTS_ENV] = args.store
     from husky_course.imitation.dagger import get_memory
 
-    student = get_memory(profile, progress=False)
-    theirs = evaluate(make_planner("memory", profile=profile), args.eval_worlds, 1, config=profile.sim,
+    student = get_memory(variant, progress=False)
+    theirs = evaluate(make_planner("memory", profile=variant), args.eval_worlds, 1, config=profile.sim,
                       progress=False)
     if course_store is not None:
         os.environ[store.ARTIFACTS_ENV] = course_store
     print(f"rounds (privileged motion): {[round(r['success_in_its_worlds'], 3) for r in student.rounds]}")
     for name, r in (("course's student (estimated motion)", ours), ("same recipe, true motion", theirs)):
         lo, hi = r.success_ci95
-        print(f"  {name:38s} success {r.success_rate:.3f} [{lo:.3f}, {hi:.3f}]")
+        print(f"  {name:38s} tuning-set success {r.success_rate:.3f} [{lo:.3f}, {hi:.3f}]")
 
 
 if __name__ == "__main__":

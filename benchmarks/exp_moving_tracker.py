@@ -108,6 +108,7 @@ class TrueMotion(TrackingPlanner):
         def update(now: np.ndarray) -> np.ndarray:
             on, dy = truth(outer._world, outer._t, outer._pose, now)
             outer._t += 1
+            walking.motion.tracks.fresh = np.zeros(len(now), bool)  # the truth: no motion is unknown
             return np.where(on, dy, 0.0)
 
         walking.motion.update = update  # type: ignore[method-assign]

@@ -1,8 +1,10 @@
 """Progress bars that suit where the code runs.
 
 In a live Jupyter kernel a bar is an ipywidget (``tqdm.auto``). Where widgets cannot render (the
-built book read offline, CI, ``HUSKY_STATIC_WIDGETS=1``) it is a plain text bar on stderr, which
-the book leaves out, so no page holds an empty widget box.
+built book read offline) it is a plain text bar on stderr, which the book leaves out, so no page
+holds an empty widget box. One switch says so, set explicitly where it is wanted (``make book``,
+the browser test's book build): ``HUSKY_STATIC_WIDGETS=1``. Nothing else changes the library's
+behaviour, ``CI`` included, so a CI run executes the chapters as a student's kernel does.
 """
 
 from __future__ import annotations
@@ -11,10 +13,13 @@ import os
 import sys
 from typing import Any
 
+#: the one switch for static widgets and text progress bars (``1``; unset, empty or ``0``: live)
+STATIC_ENV = "HUSKY_STATIC_WIDGETS"
+
 
 def static_mode() -> bool:
-    """True when interactive widgets must not be emitted (``HUSKY_STATIC_WIDGETS`` or ``CI`` set)."""
-    return bool(os.environ.get("HUSKY_STATIC_WIDGETS") or os.environ.get("CI"))
+    """True when interactive widgets must not be emitted: ``HUSKY_STATIC_WIDGETS`` set, not ``0``."""
+    return os.environ.get(STATIC_ENV, "").strip().lower() not in ("", "0", "false", "no")
 
 
 def _in_kernel() -> bool:

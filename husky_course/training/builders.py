@@ -27,12 +27,12 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from ..config import Profile, TrainConfig, config_hash, world_flag
+from ..config import Profile, TrainConfig, check_profile, config_hash, world_flag
 from ..data.dataset import Dataset
-from ..data.io import atomic_save_npy, load_npy
+from ..data.io import DatasetError, atomic_save_npy, load_npy
 from ..data.labels import survival_steps_parallel
 from ..data.splits import encoder_decoder_pairs, reward_set, split_all
-from ..data.store import dataset_id, get_dataset, model_dir, runs_dir, stored_dataset_id
+from ..data.store import dataset_dir, dataset_id, get_dataset, model_dir, runs_dir, stored_dataset_id
 from ..models.paper import EncoderDecoder, LatentRewardNet
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SafetyNet, SurvivalNet
@@ -107,9 +107,12 @@ def load(name: str, profile: Profile, safety_weight: float = 1.0) -> Trained:
         When the checkpoint (or the dataset it was trained on) is missing; the message names the
         command that builds it.
     """
+    profile = check_profile(profile)  # a name or anything else: the clear ConfigError, not an AttributeError
     try:
         ds_id = stored_dataset_id(profile)
-    except ValueError as exc:
+    except DatasetError as exc:
+        if (dataset_dir(profile) / "meta.json").is_file():
+            raise  # damaged: its own message says what to do
         raise CheckpointError(
             f"no trained {name} model for profile {profile.name!r}: its dataset is missing; train it with "
             f"`python -m husky_course train {name} "

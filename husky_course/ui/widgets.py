@@ -2,9 +2,9 @@
 
 Every widget goes through :func:`interactive_figure`: in a live Jupyter kernel with ipywidgets it
 shows sliders and dropdowns above one figure that is redrawn in place; wherever widgets cannot run
-(the built book read offline, CI, ``HUSKY_STATIC_WIDGETS=1``) it precomputes the figure for a few
-values of the controls into a player that needs no kernel and no CDN, so the page never shows an
-empty box and a reader can still scrub.
+(the built book read offline: ``make book`` sets ``HUSKY_STATIC_WIDGETS=1``) it precomputes the
+figure for a few values of the controls into a player that needs no kernel and no CDN, so the page
+never shows an empty box and a reader can still scrub.
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def interactive_figure(
 
     In a live kernel with ipywidgets the controls and a single ``Output`` are shown; the figure is
     drawn into the output and redrawn *in place* whenever a control moves (never a second figure).
-    Offline (the built book, CI, ``HUSKY_STATIC_WIDGETS=1``) there is no kernel to answer a
+    Offline (the built book: ``HUSKY_STATIC_WIDGETS=1``) there is no kernel to answer a
     control: with ``frames`` (keyword overrides of the defaults, one per frame) the figures are
     precomputed into a self-contained player (:func:`~husky_course.ui.animation.figure_player`,
     no CDN), else the figure at the defaults is drawn once, so no page shows an empty box.

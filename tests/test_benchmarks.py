@@ -1,0 +1,104 @@
+"""Every script in ``benchmarks/`` runs, at a tiny size, in the quick profile: a smoke run each.
+
+A benchmark that crashes (``make bench`` once did, on a profile name passed where a ``Profile``
+was expected) or an experiment whose patch of the library went stale fails here, in ``make test``,
+instead of on the day someone wants its numbers. Each script runs as a subprocess, exactly as
+``make bench`` or a reader runs it; the test asserts exit code 0 and the line that carries its
+result. Nothing is timed against a threshold: the scripts print ratios measured side by side.
+
+Those that compare planners or settings must do it on the tuning set (evaluation set 1) unless
+asked otherwise: their printed line names the set, and the pattern checks it. They need the quick
+artifacts that ``make test`` builds before pytest (a missing one fails with the command that
+builds it). The whole module takes about a minute on 2 cores (``--durations`` shows each).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "benchmarks"
+TUNING = "evaluation set 1"  # EvalPlan.tuning_seed: where every choice and comparison is made
+
+#: script -> (tiny-size arguments, a regular expression its stdout must match); ``{tmp}`` is a
+#: fresh directory (the experiments that train keep their own artifact store there)
+CASES: dict[str, tuple[list[str], str]] = {
+    "bench_collection.py": (
+        ["--videos", "20", "--ref-videos", "2", "--workers", "1"],
+        r"ratio fast/pybullet \(per video\): \d+\.\dx",
+    ),
+    "bench_decision.py": (
+        ["--profile", "quick", "--repeats", "5", "--episodes", "2"],
+        rf"speed-up +\d+\.\dx[\s\S]*over 2 episodes of {TUNING} \(tuning\)[\s\S]*memory +\d+\.\d\d ms mean",
+    ),
+    "bench_engines.py": (
+        ["--profile", "quick", "--worlds", "4", "--workers", "2", "--noop-tasks", "10"],
+        rf"4 worlds of {TUNING}[\s\S]*ray, 2 CPUs .*\(same numbers\)[\s\S]*ms per no-op task",
+    ),
+    "bench_pipeline.py": (
+        ["--profile", "quick", "--tiny", "--worlds", "3"],
+        rf"{TUNING} \(tuning\)[\s\S]*evaluate oracle \(3 worlds\)[\s\S]*total +\d+\.\d s",
+    ),
+    "bench_planners.py": (["--worlds", "3"], rf"3 worlds of {TUNING}\n[\s\S]*oracle +success 1\.000"),
+    "bench_training.py": (["--profile", "quick"], r"total training[\s\S]*joint model +AUC 0\.\d{3}"),
+    "exp_dagger.py": (
+        ["--profile", "quick", "--worlds", "2", "--eval-worlds", "3", "--epochs", "1", "--max-images", "400"],
+        rf"tuning set: 3 worlds of {TUNING}[\s\S]*DAgger round's success rate is (inside|outside)",
+    ),
+    "exp_memory_recipe.py": (
+        ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
+         "--eval-worlds", "3", "--store", "{tmp}"],
+        rf"3 worlds of {TUNING}, moving course:\n +course's student +success \d\.\d{{3}}",
+    ),
+    "exp_moving_failures.py": (
+        ["--profile", "quick", "--worlds", "3", "--planner", "memory"],
+        r"memory on 3 moving tuning worlds: success \d\.\d{3}",
+    ),
+    "exp_moving_ladder.py": (
+        ["--profile", "quick", "--worlds", "3"],
+        rf"3 moving tuning worlds \({TUNING}\)[\s\S]*90% of the oracle \(the goal\) +\d\.\d{{3}}",
+    ),
+    "exp_moving_student.py": (
+        ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
+         "--eval-worlds", "3", "--store", "{tmp}"],
+        r"same recipe, true motion +tuning-set success \d\.\d{3}",
+    ),
+    "exp_moving_tracker.py": (
+        ["--profile", "quick", "--worlds", "3"],
+        rf"tracks +moving: median error[\s\S]*success on 3 tuning worlds \({TUNING}\)"
+        r"[\s\S]*mapping, with true motion of what it sees \(horizon \d+\) +\d\.\d{3}",
+    ),
+    "exp_static_ladder.py": (
+        ["--profile", "quick", "--worlds", "3"],
+        rf"3 worlds of {TUNING}, quick profile[\s\S]*\| oracle \| 1\.000 \|",
+    ),
+}
+
+
+def test_every_benchmark_has_a_smoke_run() -> None:
+    """A script added to ``benchmarks/`` without a case here fails (it would otherwise rot unseen)."""
+    scripts = {p.name for p in BENCH.glob("*.py")}
+    assert scripts, f"no scripts found in {BENCH}"
+    assert scripts == set(CASES), f"without a smoke run: {sorted(scripts - set(CASES))}; " \
+                                  f"gone: {sorted(set(CASES) - scripts)}"
+
+
+@pytest.mark.parametrize("script", sorted(CASES))
+def test_benchmark_runs_tiny(script: str, tmp_path: Path) -> None:
+    args, expected = CASES[script]
+    args = [a.replace("{tmp}", str(tmp_path / "store")) for a in args]
+    env = {**os.environ, "HUSKY_PROFILE": "quick", "PYTHONUNBUFFERED": "1"}
+    env.pop("RAY_ADDRESS", None)  # bench_engines starts its own local cluster, as `make bench` does
+    done = subprocess.run(
+        [sys.executable, str(BENCH / script), *args],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, stdin=subprocess.DEVNULL,
+    )
+    said = f"stdout:\n{done.stdout[-3000:]}\nstderr:\n{done.stderr[-3000:]}"
+    assert done.returncode == 0, f"{script} {' '.join(args)} exited {done.returncode}\n{said}"
+    assert re.search(expected, done.stdout), f"{script}: no match for {expected!r}\n{said}"
