@@ -222,3 +222,15 @@ def test_diagnosis_is_cached_and_round_trips():
     # the off-by-one net ranks collisions far worse than the faithful one, no better than chance
     assert off_by_one.auc < min(0.5, faithful.auc - 0.2), (off_by_one.auc, faithful.auc)
     assert diagnosis.failed(off_by_one) and not diagnosis.failed(faithful)
+
+
+def test_sign_test_of_paired_outcomes():
+    from husky_course.course.diagnosis import sign_test
+
+    a = np.array([1, 1, 1, 1, 1, 1, 0, 1], bool)
+    b = np.array([0, 0, 0, 0, 0, 0, 0, 1], bool)
+    assert sign_test(a, b) == (6, 0, pytest.approx(2 / 2**6))  # six discordant pairs, all one way
+    assert sign_test(b, a)[:2] == (0, 6) and sign_test(a, a) == (0, 0, 1.0)
+    assert sign_test([1, 0, 1], [0, 1, 1]) == (1, 1, 1.0)
+    with pytest.raises(ValueError, match="equal shapes"):
+        sign_test(a, b[:3])

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass, replace
+from math import comb
 
 import numpy as np
 import torch
@@ -271,6 +272,18 @@ def failed(q: Classification) -> bool:
     """Chapter 4's criterion for a classifier that did not learn: AUC below :data:`MIN_AUC`, or an
     accuracy at most :data:`MIN_MARGIN` above the majority-class rate."""
     return q.auc < MIN_AUC or q.accuracy <= q.majority + MIN_MARGIN
+
+
+def sign_test(a: np.ndarray, b: np.ndarray) -> tuple[int, int, float]:
+    """Exact two-sided sign test of paired outcomes: did ``a`` succeed where ``b`` failed more often
+    than the reverse? Returns ``(only_a, only_b, p)``; ``p`` is 1 when no pair differs."""
+    a, b = np.asarray(a, bool), np.asarray(b, bool)
+    if a.shape != b.shape:
+        raise ValueError(f"paired outcomes need equal shapes, got {a.shape} and {b.shape}")
+    only_a, only_b = int((a & ~b).sum()), int((b & ~a).sum())
+    m, k = only_a + only_b, min(only_a, only_b)
+    p = min(1.0, 2 * sum(comb(m, i) for i in range(k + 1)) / 2**m) if m else 1.0
+    return only_a, only_b, p
 
 
 def variant_table(results: list[VariantResult]) -> list[dict]:
