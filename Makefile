@@ -8,11 +8,23 @@ unexport MPLBACKEND  # kernels must use the inline backend, or notebooks lose th
 
 .PHONY: book test install data lint sync lab bench clean
 
+# torch's CPU build: requirements.txt pins the release, and on Linux PyPI's build of it is the CUDA one
+# (several GB). The PyTorch CPU index has the same release for the CPU alone (an extra index: where it
+# is unreachable pip says so, retries, and takes the release from its other sources). A CUDA build:
+# `make install TORCH_INDEX=` (PyPI's), or any other PyTorch index (README, "Installing").
+TORCH_INDEX ?= https://download.pytorch.org/whl/cpu
+TORCH_PIN = $$(grep -m1 -E '^torch==' requirements.txt | cut -d'\#' -f1 | tr -d ' ')
+# pip's own messages reach the terminal and a failed pip fails the target (pipefail); only the
+# "WARNING: Location ... is ignored" lines of an absent local package folder are left out
+QUIET_PIP = 2>&1 | { grep -v "^WARNING: Location" || true; }
+
 $(VENV)/.installed: requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -m pip install --quiet -r requirements.txt 2>&1 | grep -v "^WARNING: Location" || true
-	$(PY) -m pip install --quiet --no-deps -e . 2>&1 | grep -v "^WARNING: Location" || true
+	$(PY) -m pip install --quiet --upgrade pip $(QUIET_PIP)
+	$(PY) -m pip install --quiet --no-deps $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) \
+		"$(TORCH_PIN)" $(QUIET_PIP)  # its dependencies come with requirements.txt, from PyPI
+	$(PY) -m pip install --quiet -r requirements.txt $(QUIET_PIP)
+	$(PY) -m pip install --quiet --no-deps -e . $(QUIET_PIP)
 	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab, playwright, ray"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	@# JupyterLab for students: start the notebook's kernel without asking, no news pop-up

@@ -1,4 +1,4 @@
-"""Command line: ``python -m husky_course {collect,stats,train,evaluate} ...``.
+"""Command line: ``python -m husky_course {collect,stats,train,evaluate,certify} ...``.
 
 Examples
 --------
@@ -10,6 +10,8 @@ Examples
 ``python -m husky_course train discs``, then ``evaluate --planner discs --worlds 500 --seed 0`` (reporting)
 ``python -m husky_course train memory --world moving`` (chapter 10's student, on moving obstacles)
 ``python -m husky_course evaluate --planner memory --world moving --trained-on static``
+``python -m husky_course certify --profile full --worlds 2000 --workers 2`` (chapter 9's certificate,
+at another scale: its own artifact; ``train certificate`` builds the profile's)
 """
 
 from __future__ import annotations
