@@ -28,6 +28,7 @@ from torch import Tensor, nn
 
 from ..checks import check_int
 from ..config import Profile, SimConfig, model_dims
+from ..models.base import check_images
 from ..models.paper import Encoder
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
@@ -51,8 +52,13 @@ class RandomPolicyNet(nn.Module):
         self.head = nn.Linear(dims.latent, dims.n_primitives)
 
     def forward(self, images: Tensor) -> Tensor:
-        """Scores ``(B, n_primitives)`` for depth images ``(B, size, size)`` in [0, 1]."""
-        return self.head(self.encoder(images))
+        """Scores ``(B, n_primitives)`` for depth images ``(B, size, size)`` in [0, 1].
+
+        The encoder's layers run in the default memory layout: its ``channels_last`` inference path
+        pays a weight reordering per new network, which a network used for one video never recovers.
+        """
+        x = check_images(images, self.encoder.size)
+        return self.head(self.encoder.fc(self.encoder.features(x)))
 
 
 def network_seed(seed: int, video: int) -> int:
