@@ -52,10 +52,9 @@ def check_naive_pairs(ds: Dataset, count: int) -> bool:
     """Chapter 2, exercise 2: how many naive pairs ``(i, i + 1)`` (label 0) cross into the next video."""
     want = naive_crossings(ds)
     if int(count) != want:
-        survived = int(np.asarray(ds.collided).size - np.asarray(ds.collided).sum())
         hint = (
-            "a video that ends in a collision ends on a label-1 image, which the filter drops; count the "
-            f"videos that end without one ({survived} in this pool, the last one has no next image)"
+            "a video that ends in a collision ends on a label-1 image, which the filter drops: which videos "
+            "end on a label-0 image, and does the pool's last image have a next one?"
         )
         raise AssertionError(f"{count} is not it (pairs crossing into the next video): {hint}")
     return _ok(f"{want} of the naive pairs join the last image of one video to the first of the next")
