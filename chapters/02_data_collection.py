@@ -20,10 +20,10 @@ from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
 from husky_course.course import exercises  # noqa: F401  (used in the exercises)
+from husky_course.course.policies import POLICIES, policy_lengths, policy_videos
 from husky_course.data.calibration import best_range, calibrate, mean_interval
 from husky_course.data.collect import collect
 from husky_course.data.dataset import load_dataset, stats
-from husky_course.data.policies import POLICIES, policy_lengths, policy_videos
 from husky_course.data.splits import encoder_decoder_pairs, reward_set
 from husky_course.data.store import dataset_dir, get_dataset
 from husky_course.sim.backends import make_simulator

@@ -154,7 +154,7 @@ def test_bad_inputs_are_clear_and_lose_nothing(tmp_path, small_dataset_dir, caps
 
 
 def test_uniform_policy_replays_the_collection(small_dataset_dir):
-    from husky_course.data.policies import policy_lengths
+    from husky_course.course.policies import policy_lengths
 
     ds = load_dataset(small_dataset_dir)  # collection seed 3, 120 videos
     lengths, played = policy_lengths(QUICK.sim, "uniform", 40, 3)
@@ -166,8 +166,8 @@ def test_uniform_policy_replays_the_collection(small_dataset_dir):
 def test_random_network_policy_is_seeded_and_stops_at_a_collision():
     import torch
 
+    from husky_course.course.policies import play_network_video, policy_lengths, random_network
     from husky_course.data.collect import world_seed_for
-    from husky_course.data.policies import play_network_video, policy_lengths, random_network
     from husky_course.sim.fast import FastSimulator
 
     state = torch.random.get_rng_state()

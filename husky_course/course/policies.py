@@ -17,7 +17,9 @@ framework that uses a set of random weights". The words allow two policies:
   predict images and collision, not primitives.
 
 :func:`policy_lengths` plays both on the same worlds (those of collection ``seed``) and returns the
-primitives applied per video, the colliding one counted as in the dataset.
+primitives applied per video, the colliding one counted as in the dataset. (The module sits with
+the course's analyses rather than in :mod:`husky_course.data`: it builds a network, and the data
+stage comes before the models.)
 """
 
 from __future__ import annotations
@@ -28,11 +30,11 @@ from torch import Tensor, nn
 
 from ..checks import check_int
 from ..config import Profile, SimConfig, model_dims
+from ..data.collect import play_video, world_seed_for
 from ..models.base import check_images
 from ..models.paper import Encoder
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
-from .collect import play_video, world_seed_for
 
 #: videos per reading in chapter 2's comparison, by profile.  # TODO(config): move to config
 POLICY_VIDEOS = {"quick": 300, "full": 2_000}
