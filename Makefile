@@ -60,6 +60,13 @@ lab: install  ## the chapters in JupyterLab, in the profile the book was last bu
 sync: install  ## after editing a chapter source (or its notebook outside Jupyter): update the other side
 	$(VENV)/bin/jupytext --sync chapters/*.py
 
+# Every chapter runs twice here, on purpose: nbval runs it as a student's kernel does (live widgets,
+# the NBVAL_CHECK_OUTPUT cells compared), and tests/test_browser.py builds the book from it as
+# `make book` does (HUSKY_STATIC_WIDGETS=1: players precomputed, then checked in Chromium). Two code
+# paths, so neither execution can stand in for the other; measured on 2 busy cores, chapter 1 took
+# 34 s live / 39 s static and chapter 7 86 s / 104 s: not cheap. The book's executions are cached in
+# _build/browser-test and kept while husky_course/, the requirements and _config.yml are unchanged
+# (then only edited chapters run again); a fresh clone (CI) or a library change pays in full.
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null

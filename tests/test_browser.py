@@ -6,6 +6,9 @@ re-renders every page on every run, so the pages checked are never left over fro
 build; only notebook *executions* are reused, from jupyter-book's cache, and that cache is wiped
 whenever the library, the requirements or the build config change (``library.sha256``). With the
 quick artifacts present the build takes seconds plus the execution of the chapters that changed.
+It cannot reuse nbval's executions in ``make test``: nbval runs the chapters with live widgets (a
+student's kernel), this build with ``HUSKY_STATIC_WIDGETS=1`` (the book's players), two code
+paths; the Makefile's ``test`` target has the measured cost of running both.
 
 Then every page of ``_toc.yml`` is opened in headless Chromium (driven by Playwright through the
 system browser's executable path, offline: see ``tests/book_browser.py``) and checked: it loads,
