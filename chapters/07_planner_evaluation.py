@@ -117,9 +117,24 @@ ax.set_ylim(0, 1.05)
 ax.set_title(f"{N} held-out worlds, exact 95% confidence intervals", fontsize=10)
 plt.show()
 
+# %% [markdown]
+# Which learned planner is "the best" is a choice too. It is made on the tuning set (its own held-out
+# worlds, `profile.eval.tuning_seed`), so that the reporting set's numbers for the chosen one are
+# those of a planner fixed in advance; the paragraph below also states the bound for the planner
+# that looks best on the reporting set itself, with the Bonferroni correction of chapter 8 for that
+# choice.
+
 # %%
+N_TUNE, TUNE = profile.eval.tuning_worlds, profile.eval.tuning_seed
 learned = ["lookahead", "rnn", "distilled"]
-best = max(learned, key=lambda n: results[n].success_rate)
+tuned = {n: evaluate_stored(planner(n), N_TUNE, TUNE, profile, progress=False, workers=W) for n in learned}
+best = max(learned, key=lambda n: tuned[n].success_rate)  # chosen on the tuning set
+print(f"tuning set ({N_TUNE} worlds of evaluation set {TUNE}): "
+      + ", ".join(f"{n} {tuned[n].success_rate:.3f}" for n in learned) + f"; chosen: {best}")
+looks_best = max(learned, key=lambda n: results[n].success_rate)  # what the reporting set alone would pick
+r_lb = results[looks_best]
+lb_collisions = round(r_lb.collision_rate * r_lb.worlds)
+lb_corrected = clopper_pearson(lb_collisions, r_lb.worlds, 1 - 0.05 / len(learned), "upper")[1]
 ratio = results[best].success_rate / results["oracle"].success_rate
 heur = results["heuristic"].success_rate
 worst_learned = min(results[n].success_rate for n in learned)
@@ -130,12 +145,18 @@ display(Markdown(
     f"{results['oracle'].success_rate:.1%}: that is how many of these worlds can be crossed at all. "
     f"Algorithm 1 (`lookahead`) crosses {results['lookahead'].success_rate:.1%}, the RNN planner "
     f"{results['rnn'].success_rate:.1%} and the distilled oracle {results['distilled'].success_rate:.1%}; "
-    f"the non-learned heuristic crosses {heur:.1%}. The best learned planner, `{best}`, reaches "
-    f"**{ratio:.0%} of the oracle's success rate** (the goal was 95%"
+    f"the non-learned heuristic crosses {heur:.1%}. The best learned planner on the tuning set, `{best}`, "
+    f"reaches **{ratio:.0%} of the oracle's success rate** here (the goal was 95%"
     f"{'' if ratio >= 0.95 else f': it falls short by {0.95 - ratio:.0%} of the oracle'}). "
-    f"Its collision rate is at most {results[best].collision_rate_upper95:.1%} with 95% confidence: a "
-    "statement about unseen worlds from this distribution, like the PAC-Bayes certificates of the work "
-    "this project grew from. "
+    f"Its collision rate is at most {results[best].collision_rate_upper95:.1%} with 95% confidence, and as it "
+    "was chosen on other worlds, that is a statement about unseen worlds from this distribution, like the "
+    "PAC-Bayes certificates of the work this project grew from. "
+    + (f"On the reporting set it also looks best; had it been picked here, among {len(learned)}, its "
+       f"bound would be {lb_corrected:.1%} (Bonferroni, as in chapter 8). "
+       if looks_best == best else
+       f"On the reporting set `{looks_best}` looks best instead; picked there, among {len(learned)}, its "
+       f"collision rate is at most {lb_corrected:.1%} with 95% confidence (Bonferroni, as in chapter 8), "
+       f"not the {r_lb.collision_rate_upper95:.1%} of its row. ")
     + ("Every learned planner beats random; " if worst_learned > results["random"].success_rate else
        "Not every learned planner beats random; ")
     + ("all of them beat the heuristic." if worst_learned > heur else
@@ -151,9 +172,6 @@ display(Markdown(
 # the table above: a `look_ahead` picked by its score on the table's worlds would flatter the table.
 
 # %%
-N_TUNE, TUNE = profile.eval.tuning_worlds, profile.eval.tuning_seed
-
-
 def swept(name, k):
     return evaluate_stored(planner(name, k), N_TUNE, TUNE, profile, progress=False, workers=W)
 
@@ -250,5 +268,7 @@ widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, de
 #    worse than another's. Does the RNN planner, which scores whole sequences, avoid it?
 # 4. Does the distilled planner fail because it visits states the random policy never reached?
 #    `python benchmarks/exp_dagger.py --profile quick --worlds 300 --eval-worlds 100` runs one round of
-#    data aggregation (DAgger): it labels the planner's own states with the simulator and retrains.
-#    What does the result say about where the planner's errors come from?
+#    data aggregation (DAgger): it labels the planner's own states with the simulator, retrains, and
+#    compares both networks on the tuning set (evaluation set 1, as the script prints; deciding
+#    whether the round helped is a choice, so not on the reporting set of the table above). What
+#    does the result say about where the planner's errors come from?
