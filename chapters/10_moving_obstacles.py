@@ -32,9 +32,11 @@ from IPython.display import HTML, Markdown, display
 from husky_course.config import get_profile, with_world
 from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner, SnapshotPlanner
+from husky_course.course.diagnosis import sign_test
 from husky_course.data.calibration import mean_interval, video_lengths
 from husky_course.evaluation.analysis import obstacle_hit
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.evaluation.stored import evaluate_stored
 from husky_course.imitation.dagger import get_memory
 from husky_course.planners.base import episode_start
@@ -278,6 +280,21 @@ ratio = stud.success_rate / orc.success_rate
 track = res["mapping, with motion"]
 drops = {n: res_static[n].success_rate - res[n].success_rate for n in on_static if n != "oracle"}
 worst = max(drops, key=drops.get)
+# the same worlds on both courses: worlds a planner crosses only when still against only when moving,
+# an exact sign test each, at 0.05 / k (Bonferroni) so that the k verdicts hold together with 95%
+paired = {}
+for n in drops:
+    by_seed = {e.world_seed: e.success for e in res[n].episodes}
+    paired[n] = sign_test(np.array([e.success for e in res_static[n].episodes]),
+                          np.array([by_seed[e.world_seed] for e in res_static[n].episodes]))
+alpha = 0.05 / len(paired)
+loses = [n for n, (a, b, p) in paired.items() if a > b and p < alpha]
+gains = [n for n, (a, b, p) in paired.items() if b > a and p < alpha]
+display(Markdown(markdown_table(
+    [{"static planner": n, "success, static": res_static[n].success_rate, "success, moving": res[n].success_rate,
+      "worlds crossed only when still": a, "only when moving": b, "sign test p": f"{p:.2g}"}
+     for n, (a, b, p) in paired.items()])))
+print(f"Bonferroni over {len(paired)} planners: each verdict at p < {alpha:.3g}")
 uncrossable, collided = round((1 - orc.crossable_rate) * orc.worlds), round(orc.collision_rate * orc.worlds)
 text = (
     f"The space-time oracle crosses {orc.success_rate:.1%} of the moving worlds; it reports {uncrossable} of "
@@ -292,9 +309,16 @@ text = (
     + f"Knowing a cylinder's motion only from its second image on, as a planner reading motion off images "
     f"must (one image shows where a cylinder is, not where it goes), perception otherwise perfect: "
     f"{second.success_rate:.1%}, {second.success_rate / orc.success_rate:.0%} of the oracle. "
-    + "Every static planner "
-    + ("loses" if min(drops.values()) > 0 else "but one loses")
-    + f" on the moving course, `{worst}` most ({drops[worst]:.1%} of the worlds). ")
+    + (f"Every one of the {len(paired)} static planners loses measurably on the moving course"
+       if len(loses) == len(paired) else
+       f"{len(loses)} of the {len(paired)} static planners lose measurably on the moving course"
+       + (f" ({', '.join(f'`{n}`' for n in loses)})" if loses else "")
+       + (f", {len(gains)} gain ({', '.join(f'`{n}`' for n in gains)})" if gains else "")
+       + ("; for the others the sign test cannot tell the courses apart" if len(loses) + len(gains) < len(paired)
+          else ""))
+    + " (sign tests on the same worlds, 95% overall)"
+    + (f"; `{worst}` drops most, by {drops[worst]:.1%} of the worlds. " if drops[worst] > 0 else
+       ": none of them crosses fewer worlds on the moving course. "))
 text += (
     f"The memory student trained on moving worlds crosses {stud.success_rate:.1%}, {ratio:.0%} of the "
     f"oracle, {'meeting' if ratio >= 0.9 else 'short of'} the goal of 90%; the static-trained student "
@@ -342,14 +366,24 @@ hits = [obstacle_hit(e, sim) for e in fails]
 kinds = ["wall" if i < 0 else ("moving cylinder" if i in w.moving else "standing cylinder") for i, w, _ in hits]
 counts = {k: kinds.count(k) for k in ("moving cylinder", "standing cylinder", "wall")}
 display(Markdown(markdown_table([counts]) if fails else "No collisions on these worlds."))
-if fails:
-    shares = {k: v / len(fails) for k, v in counts.items()}
+cylinder_hits = counts["moving cylinder"] + counts["standing cylinder"]
+if cylinder_hits:
     share_movers = movers / wc.n_obstacles
-    display(Markdown(
-        f"{shares['moving cylinder']:.0%} of its collisions are with a moving cylinder, although "
-        f"{share_movers:.0%} of the cylinders move: "
-        + ("the motion it cannot anticipate is what ends its runs." if shares["moving cylinder"] > share_movers
-           else "the moving cylinders are not over-represented among what it hits.")))
+    lo, hi = clopper_pearson(counts["moving cylinder"], cylinder_hits)  # exact 95% interval
+    text = (f"{counts['moving cylinder']} of the {cylinder_hits} cylinders it hits move "
+            f"({counts['moving cylinder'] / cylinder_hits:.0%}, exact 95% interval [{lo:.0%}, {hi:.0%}]), "
+            f"while {share_movers:.0%} of the cylinders move: ")
+    if lo > share_movers:
+        text += ("moving cylinders are over-represented among what it hits. That points to the motion, without "
+                 "proving that anticipating it is what fails: a walking cylinder also crosses more of the course "
+                 "than a standing one, so any planner meets it more often.")
+    elif hi < share_movers:
+        text += "moving cylinders are under-represented among what it hits."
+    else:
+        text += ("the interval contains their share, so these collisions cannot tell whether the moving "
+                 "cylinders are what it handles worst.")
+    display(Markdown(text))
+if fails:
     mover_fails = [e for e, k in zip(fails, kinds, strict=True) if k == "moving cylinder"][:1]
     if mover_fails:
         display(HTML(animation.course_player(sim, mover_fails[0], title="moving-trained student, ")))
