@@ -9,7 +9,7 @@ result. Nothing is timed against a threshold: the scripts print ratios measured 
 Those that compare planners or settings must do it on the tuning set (evaluation set 1) unless
 asked otherwise: their printed line names the set, and the pattern checks it. They need the quick
 artifacts that ``make test`` builds before pytest (a missing one fails with the command that
-builds it). The whole module takes about a minute on 2 cores (``--durations`` shows each).
+builds it). The scripts run two at a time; the whole module takes about a minute on 2 cores.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import os
 import re
 import subprocess
 import sys
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -89,16 +90,35 @@ def test_every_benchmark_has_a_smoke_run() -> None:
                                   f"gone: {sorted(set(CASES) - scripts)}"
 
 
-@pytest.mark.parametrize("script", sorted(CASES))
-def test_benchmark_runs_tiny(script: str, tmp_path: Path) -> None:
-    args, expected = CASES[script]
-    args = [a.replace("{tmp}", str(tmp_path / "store")) for a in args]
+def run(script: str, store: Path) -> tuple[list[str], subprocess.CompletedProcess]:
+    """Run ``script`` at its tiny size as ``make bench`` would; return its arguments and the result."""
+    args = [a.replace("{tmp}", str(store)) for a in CASES[script][0]]
     env = {**os.environ, "HUSKY_PROFILE": "quick", "PYTHONUNBUFFERED": "1"}
     env.pop("RAY_ADDRESS", None)  # bench_engines starts its own local cluster, as `make bench` does
     done = subprocess.run(
         [sys.executable, str(BENCH / script), *args],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, stdin=subprocess.DEVNULL,
     )
+    return args, done
+
+
+@pytest.fixture(scope="module")
+def runs(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory):
+    """The selected scripts, two at a time (most use one core; the module's wall time halves)."""
+    selected = [item.callspec.params["script"] for item in request.session.items
+                if getattr(item, "originalname", "") == "test_benchmark_runs_tiny"]
+    with ThreadPoolExecutor(max_workers=2) as pool:  # the longest first: bench_engines starts Ray
+        futures = {s: pool.submit(run, s, tmp_path_factory.mktemp(s.removesuffix(".py")) / "store")
+                   for s in sorted(selected, key=lambda s: s != "bench_engines.py")}
+        yield futures
+        for future in futures.values():
+            future.cancel()
+
+
+@pytest.mark.parametrize("script", sorted(CASES))
+def test_benchmark_runs_tiny(script: str, runs: dict[str, Future]) -> None:
+    args, done = runs[script].result()
+    expected = CASES[script][1]
     said = f"stdout:\n{done.stdout[-3000:]}\nstderr:\n{done.stderr[-3000:]}"
     assert done.returncode == 0, f"{script} {' '.join(args)} exited {done.returncode}\n{said}"
     assert re.search(expected, done.stdout), f"{script}: no match for {expected!r}\n{said}"
