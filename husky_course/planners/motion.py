@@ -39,6 +39,7 @@ import math
 import numpy as np
 
 from ..config import SimConfig
+from .arrivals import Arrivals
 from .perception import DepthScan, EgoMap
 
 
@@ -316,9 +317,10 @@ class WalkingMap:
     On the static course every velocity is 0 and it is the map itself.
     """
 
-    def __init__(self, config: SimConfig, forget_behind: float) -> None:
+    def __init__(self, config: SimConfig, forget_behind: float, arrivals: bool = False) -> None:
         self.map = EgoMap(DepthScan(config), forget_behind)
         self.motion = MotionMemory(config)
+        self.arrivals = Arrivals(config) if arrivals else None  #: first sights that walked in
         self.velocity = np.empty(0)  #: per point, m per step along y
         self.fresh = np.zeros(0, bool)  #: per point: its piece was seen once (its velocity unknown)
 
@@ -336,10 +338,20 @@ class WalkingMap:
         self.map.reset()
         self.motion.reset()
         self.velocity, self.fresh = np.empty(0), np.zeros(0, bool)
+        if self.arrivals is not None:
+            self.arrivals.reset()
 
     def add(self, obs: np.ndarray) -> np.ndarray:
         """Merge the scan of ``obs``; return its points' velocities (they come first in :attr:`points`)."""
-        v = self.motion.update(self.map.scan(obs))
+        now = self.map.scan(obs)
+        v = self.motion.update(now)
+        if self.arrivals is not None:  # a first sight where the last image saw free space walked in
+            m = self.motion
+            for idx in segments(now, 0.3, m.spacing):
+                if m.tracks.fresh[idx].all() and np.ptp(now[idx], axis=0).max() <= 1.0:
+                    disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]
+                    v[idx] = self.arrivals.speeds(disc[None])[0]
+            self.arrivals.remember(self.map.scan.columns(obs))
         kept = self.map.add(obs)
         self.velocity = np.concatenate([v, self.velocity[kept]])
         self.fresh = np.concatenate([self.motion.tracks.fresh, self.fresh[kept]])
@@ -354,6 +366,8 @@ class WalkingMap:
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``, and one step's walk."""
         kept = self.map.move(dx, dy)
+        if self.arrivals is not None:
+            self.arrivals.move(dx, dy)
         self.velocity, self.fresh = self.velocity[kept], self.fresh[kept]
         self.map.points[:, 1] += self.velocity
         self.motion.move(dx, dy)

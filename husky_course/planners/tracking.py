@@ -7,7 +7,9 @@ student (chapter 10), reading the same two things the student's memory gives it.
   and followed from image to image (:class:`~husky_course.planners.motion.Tracks`): every point of
   the current scan gets the lateral displacement per step of its piece's track, the weighted line
   through its last looks (0 for a piece seen for the first time: assumed standing until the next
-  image says otherwise).
+  image says otherwise), unless it stands where the previous image saw free space: then it walked
+  in (:mod:`~husky_course.planners.arrivals`; 0.723 without, 0.740 with, on 300 moving tuning
+  worlds, full profile).
 * **A map that walks** (:class:`~husky_course.planners.motion.WalkingMap`). The points of
   :class:`~husky_course.planners.mapping.MappingPlanner`'s map each carry that velocity; after
   every step a remembered point moves by it (dead reckoning of the robot *and* of the obstacle),
@@ -43,9 +45,10 @@ class TrackingPlanner(MappingPlanner):
 
     name = "tracking"  #: the mapping planner, with motion
 
-    def __init__(self, config: SimConfig | None = None, horizon: int = 5, **kwargs: float) -> None:
+    def __init__(self, config: SimConfig | None = None, horizon: int = 5, arrivals: bool = True,
+                 **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
-        self.map = WalkingMap(self.config, self.map.forget_behind)  # type: ignore[assignment]
+        self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
 
     @property
     def velocity(self) -> np.ndarray:
