@@ -61,6 +61,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         ["--profile", "quick", "--worlds", "3", "--planner", "memory"],
         r"memory on 3 moving tuning worlds: success \d\.\d{3}",
     ),
+    "exp_moving_arrivals.py": (
+        ["--profile", "quick", "--worlds", "3", "--workers", "1"],
+        rf"3 worlds of {TUNING}[\s\S]*discs +arrivals +\d\.\d{{3}}"
+        r"[\s\S]*tracking +worlds won only with arrivals: \d+",
+    ),
     "exp_moving_ladder.py": (
         ["--profile", "quick", "--worlds", "3"],
         rf"3 moving tuning worlds \({TUNING}\)[\s\S]*90% of the oracle \(the goal\) +\d\.\d{{3}}",
