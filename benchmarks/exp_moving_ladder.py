@@ -22,8 +22,8 @@ in rungs of what a velocity oracle may give away:
 
 A map point belongs to the cylinder whose surface is within 0.3 m of it (else it is a wall and
 stands). Printed beside them, on the same worlds: the privileged planners with perfect perception
-(:class:`~husky_course.course.ceiling.SecondLookPlanner`,
-:class:`~husky_course.course.ceiling.SeenMotionPlanner`) and the oracle, with 90% of its success
+(:class:`~husky_course.planners.reference.SecondLookPlanner`,
+:class:`~husky_course.planners.reference.SeenMotionPlanner`) and the oracle, with 90% of its success
 (issue 14's goal, there stated on the reporting set).
 """
 
@@ -34,11 +34,11 @@ import argparse
 import numpy as np
 
 from husky_course.config import get_profile, with_world
-from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner
 from husky_course.evaluation.episodes import evaluate
 from husky_course.planners.base import EpisodeStart, Planner
 from husky_course.planners.motion import WalkingMap
 from husky_course.planners.oracle import OraclePlanner
+from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 

@@ -7,7 +7,7 @@ a smoke run, no longer like for like).
 Trains, in a separate artifact store (``--store``, default ``/tmp/husky-exp-moving``), the moving-course
 memory student by the same DAgger recipe, but with a privileged motion estimate: every point of the
 current scan gets the true lateral speed of the cylinder it lies on (0 for walls and standing
-cylinders) instead of :func:`husky_course.planners.motion.lateral_velocities` (where it walks on
+cylinders) instead of the course's estimate (:class:`husky_course.planners.motion.Tracks`; where it walks on
 from there, in the walking map, is as in the course's student). Everything else is
 the course's student. Evaluates it and the course's student (which must be trained already) on the
 tuning set (evaluation set 1) and prints both success rates: the gap is what a perfect motion

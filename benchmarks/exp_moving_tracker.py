@@ -15,7 +15,7 @@ All on the tuning set (evaluation set 1) of the moving course, nothing trained.
    with its own estimate, and with the true velocity of every point it sees (privileged, the
    ceiling of a perfect estimate for this planner), beside the mapping planner (no motion), the
    "seen, with motion" analysis planner (every cylinder seen, exactly) and
-   :class:`~husky_course.course.ceiling.SecondLookPlanner`, the same with a cylinder's motion known
+   :class:`~husky_course.planners.reference.SecondLookPlanner`, the same with a cylinder's motion known
    only from its second image on (what reading motion off images could reach with perfect
    perception); then the horizon sweep of the tracker.
 """
@@ -27,16 +27,52 @@ import argparse
 import numpy as np
 
 from husky_course.config import get_profile, with_world
-from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate
 from husky_course.planners.base import episode_start
 from husky_course.planners.mapping import MappingPlanner
-from husky_course.planners.motion import MotionMemory, lateral_velocities
+from husky_course.planners.motion import MotionMemory, piece_centre, segments
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.planners.perception import DepthScan
+from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner
 from husky_course.planners.tracking import TrackingPlanner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.world import World
+
+
+def lateral_velocities(
+    previous: np.ndarray,
+    current: np.ndarray,
+    max_step: float,
+    previous_v: np.ndarray | None = None,
+    camera_x: float = 0.45,
+    radius: float = 0.25,
+    spacing: float = 0.0,
+    x_gate: float = 0.3,
+    gap: float = 0.3,
+) -> np.ndarray:
+    """Estimated lateral displacement per step ``(m,)`` of every point of ``current``: the two-image
+    estimator the course used first (each piece matched to the previous image's nearest piece, its
+    displacement averaged with the previous estimate), kept here for the comparison (the planners
+    use :class:`husky_course.planners.motion.Tracks`).
+
+    ``previous`` and ``current`` are scans in the *current* robot frame, ``previous_v`` the
+    velocities estimated for ``previous`` (or ``None``); ``max_step`` bounds how far a piece can
+    move across in one step (a match further away is no match).
+    """
+    v = np.zeros(len(current))
+    before = segments(previous, gap, spacing)
+    if not before or not len(current):
+        return v
+    centres = np.array([piece_centre(previous[idx], camera_x, radius) for idx in before])
+    known = np.array([0.0 if previous_v is None else float(np.mean(previous_v[idx])) for idx in before])
+    for idx in segments(current, gap, spacing):
+        cx, cy = piece_centre(current[idx], camera_x, radius)
+        dy = cy - centres[:, 1]
+        ok = np.flatnonzero((np.abs(centres[:, 0] - cx) < x_gate) & (np.abs(dy) <= max_step))
+        if ok.size:
+            i = ok[np.argmin(np.abs(dy[ok] - known[ok]))]
+            v[idx] = dy[i] if known[i] == 0 else (dy[i] + known[i]) / 2
+    return v
 
 
 def truth(world: World, t: int, pose: np.ndarray, now: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

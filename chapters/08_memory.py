@@ -30,7 +30,6 @@ from IPython.display import HTML, Markdown, display
 
 from husky_course.config import get_profile
 from husky_course.course import exercises  # noqa: F401  (used in the exercises)
-from husky_course.course.ceiling import SeenObstaclesPlanner
 from husky_course.course.ladder import static_ladder
 from husky_course.evaluation.analysis import collision_cause
 from husky_course.evaluation.episodes import eval_world_seeds
@@ -38,6 +37,7 @@ from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.evaluation.stored import evaluate_stored
 from husky_course.imitation.dagger import get_memory
 from husky_course.imitation.discs import get_discs
+from husky_course.planners.reference import SeenObstaclesPlanner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.ui import animation, plotting

@@ -31,7 +31,6 @@ from IPython.display import HTML, Markdown, display
 
 from husky_course.config import get_profile, with_world
 from husky_course.course import exercises  # noqa: F401  (used in the exercises)
-from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner, SnapshotPlanner
 from husky_course.course.diagnosis import sign_test
 from husky_course.data.calibration import mean_interval, video_lengths
 from husky_course.evaluation.analysis import obstacle_hit
@@ -40,6 +39,7 @@ from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.evaluation.stored import evaluate_stored
 from husky_course.imitation.dagger import get_memory
 from husky_course.planners.base import episode_start
+from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner, SnapshotPlanner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.ui import animation, plotting

@@ -14,12 +14,12 @@ import pytest
 import torch
 
 from husky_course.config import get_profile
-from husky_course.course.ceiling import TrueDiscsPlanner
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
 from husky_course.imitation.discs import piece_views, view_poses
 from husky_course.models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
 from husky_course.planners.base import PlannerError
 from husky_course.planners.discs import DiscMap, DiscPlanner, PieceReader, _NumpyMLP
+from husky_course.planners.reference import TrueDiscsPlanner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.world import World
@@ -187,8 +187,8 @@ def test_references_that_know_only_what_images_showed_ignore_a_hidden_cylinder()
     same first move with it and without it."""
     from dataclasses import replace
 
-    from husky_course.course.ceiling import SeenObstaclesPlanner
     from husky_course.planners.oracle import OraclePlanner
+    from husky_course.planners.reference import SeenObstaclesPlanner
 
     sim = FastSimulator(QUICK.sim)
     for seed in eval_world_seeds(40, TEST_SET):

@@ -3,6 +3,10 @@ tracks, and the map whose points walk (``husky_course.planners.motion``)."""
 
 from __future__ import annotations
 
+import importlib.util
+from pathlib import Path
+from types import ModuleType
+
 import numpy as np
 
 from husky_course.config import get_profile, with_world
@@ -12,6 +16,16 @@ from husky_course.sim.fast import FastSimulator
 
 QUICK = get_profile("quick")
 MOVING = with_world(QUICK, "moving")
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def _benchmark(name: str) -> ModuleType:
+    """The script ``benchmarks/<name>.py`` as a module (its ``main`` is not run)."""
+    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _arc(centre: tuple[float, float], radius: float) -> np.ndarray:
@@ -36,8 +50,12 @@ def test_piece_centre_locates_a_cylinder():
 def test_lateral_velocities_from_two_scans():
     """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step
     (the columns that hit it differ between the two); standing surfaces at 0; a piece with no match
-    within one step's walk at 0; a second look averages with the first."""
-    from husky_course.planners.motion import MotionMemory, lateral_velocities, segments
+    within one step's walk at 0; a second look averages with the first. The two-image estimator
+    lives in the benchmark that compares it (``benchmarks/exp_moving_tracker.py``); the memory is the
+    library's."""
+    from husky_course.planners.motion import MotionMemory, segments
+
+    lateral_velocities = _benchmark("exp_moving_tracker").lateral_velocities
 
     wall = np.c_[np.linspace(1.0, 4.0, 30), np.full(30, 2.5)]
     far = np.c_[np.full(5, 4.5), np.linspace(-3.0, -2.8, 5)]

@@ -264,7 +264,7 @@ def test_exercise_checks():
 def test_ceilings_order_snapshot_below_seen_motion_on_the_moving_course():
     """Knowing the motion of what the camera has shown beats knowing every position without motion;
     on the static course the two coincide with knowing everything (nothing moves)."""
-    from husky_course.course.ceiling import SeenMotionPlanner, SnapshotPlanner
+    from husky_course.planners.reference import SeenMotionPlanner, SnapshotPlanner
 
     seen = evaluate(SeenMotionPlanner(), 30, 1, config=MOVING.sim, progress=False)
     snap = evaluate(SnapshotPlanner(), 30, 1, config=MOVING.sim, progress=False)
@@ -277,7 +277,7 @@ def test_ceilings_order_snapshot_below_seen_motion_on_the_moving_course():
 def test_second_look_knows_a_cylinders_motion_from_its_second_image():
     """On the static course it is "seen, with motion" world for world (nothing moves); on the moving
     course a first sight's motion is unknown to it, so somewhere it chooses differently."""
-    from husky_course.course.ceiling import SecondLookPlanner, SeenMotionPlanner
+    from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner
 
     def actions(planner, course, seed):  # type: ignore[no-untyped-def]
         return run_episode(planner, FastSimulator(course.sim), int(seed), course.sim.max_primitives).actions
@@ -297,7 +297,7 @@ def test_widening_replaces_each_first_sight_by_a_standing_row_and_leaves_the_res
     """What ``widen`` changes in the world the second look plans in: each cylinder seen for the first
     time becomes ``2 * widen + 1`` standing copies, half the fastest walk apart across the course;
     every cylinder seen before keeps its place and its motion."""
-    from husky_course.course.ceiling import SecondLookPlanner
+    from husky_course.planners.reference import SecondLookPlanner
 
     world = make_world(5, MOVING.sim.world)
     known = np.arange(len(world.obstacles))

@@ -7,15 +7,14 @@ import numpy as np
 import pytest
 import torch
 
-from husky_course.course import ceiling
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.models.discs import DiscNet
 from husky_course.models.rnn import RNNLookahead
 from husky_course.models.safety import JointModel, SurvivalNet
-from husky_course.planners import base, classic, learned, oracle
+from husky_course.planners import base, classic, learned, oracle, reference
 from husky_course.planners.base import EpisodeStart, Planner, episode_key
 from husky_course.planners.discs import DiscPlanner
-from husky_course.planners.registry import make_planner
+from husky_course.planners.registry import PLANNERS, REFERENCE_PLANNERS, make_planner
 from husky_course.sim.backends import make_simulator
 
 
@@ -78,19 +77,20 @@ def _all_planner_classes() -> set[type]:
     return found
 
 
-def test_only_the_oracle_and_the_analysis_ceilings_are_privileged():
-    """Among planners, only the oracle; beside it, the course's ceiling planners (analysis tools in
-    ``course/ceiling.py``, never a learner or a planner the book ranks as one). Every module that
-    defines planners is imported here, so the answer does not depend on which tests ran first."""
-    assert {base, classic, learned, oracle, ceiling}
+def test_only_the_oracle_and_the_analysis_references_are_privileged():
+    """Among the planners a student picks, only the oracle; beside it, the references (analysis tools
+    in ``planners/reference.py``, built by the names in ``REFERENCE_PLANNERS``, never a learner or a
+    planner the book ranks as one). Every module that defines planners is imported here, so the
+    answer does not depend on which tests ran first."""
+    assert {base, classic, learned, oracle, reference}
     privileged = {c for c in _all_planner_classes() if c.privileged}
-    in_planners = {c.__name__ for c in privileged if c.__module__.startswith("husky_course.planners")}
-    assert in_planners == {"OraclePlanner"}
-    analysis = {c for c in privileged if not c.__module__.startswith("husky_course.planners")}
-    assert all(c.__module__ == ceiling.__name__ for c in analysis)
-    public = {c.__name__ for c in analysis if not c.__name__.startswith("_")}
+    assert {c.__name__ for c in privileged if c.__module__ != reference.__name__} == {"OraclePlanner"}
+    public = {c.__name__ for c in privileged if not c.__name__.startswith("_")} - {"OraclePlanner"}
     assert public == {"SeenObstaclesPlanner", "SeenMotionPlanner", "SecondLookPlanner", "SnapshotPlanner",
                       "TrueDiscsPlanner"}
+    assert not set(REFERENCE_PLANNERS) & set(PLANNERS)  # no list a student picks from names them
+    built = {type(make_planner(name)) for name in REFERENCE_PLANNERS}
+    assert {c.__name__ for c in built} == public and all(c.privileged for c in built)
 
 
 @pytest.mark.parametrize("name", ["random", "heuristic", "lookahead", "rnn", "distilled", "discs"])

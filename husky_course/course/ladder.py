@@ -12,10 +12,10 @@ searches over (``benchmarks/exp_static_ladder.py`` runs it on 1,000 tuning world
 4. ``discs``: the disc planner as configured (:class:`~husky_course.config.DiscConfig`: a cylinder
    piece's points that its disc does not explain stay in the map);
 5. ``discs, read from the truth``: every piece read as the cylinder most of its columns hit,
-   exactly (:class:`~husky_course.course.ceiling.TrueDiscsPlanner`, privileged): what a perfect
+   exactly (:class:`~husky_course.planners.reference.TrueDiscsPlanner`, privileged): what a perfect
    network would give this map;
 6. ``seen so far``: every cylinder any image has rendered, exactly, and the walls
-   (:class:`~husky_course.course.ceiling.SeenObstaclesPlanner`, privileged);
+   (:class:`~husky_course.planners.reference.SeenObstaclesPlanner`, privileged);
 7. ``oracle``: every cylinder.
 
 Rungs 5 to 7 are references, not bounds on camera-based planners: each is optimistic about space
@@ -27,7 +27,6 @@ from __future__ import annotations
 from ..config import Profile
 from ..planners.base import Planner
 from ..planners.registry import make_planner
-from .ceiling import SeenObstaclesPlanner, TrueDiscsPlanner
 
 
 def static_ladder(profile: Profile) -> list[tuple[str, Planner]]:
@@ -39,7 +38,7 @@ def static_ladder(profile: Profile) -> list[tuple[str, Planner]]:
         ("mapping, margin 0", make_planner("mapping", config=profile.sim, margin=margin)),
         ("discs, no unexplained points", make_planner("discs", profile=profile, unexplained=float("inf"))),
         ("discs", make_planner("discs", profile=profile)),
-        ("discs, read from the truth", TrueDiscsPlanner(profile.sim, margin=margin)),
-        ("seen so far", SeenObstaclesPlanner(memory=True)),
+        ("discs, read from the truth", make_planner("true-discs", config=profile.sim, margin=margin)),
+        ("seen so far", make_planner("seen-so-far")),
         ("oracle", make_planner("oracle")),
     ]

@@ -20,8 +20,6 @@ current frame by dead reckoning, and compares them with the current scan.
   or walks at a speed in the world's ``speed_range``: a slope within its error of 0 reads as
   standing, and a walk is clipped into the range). A piece seen for the first time has no
   velocity yet: it is taken as standing and marked *seen once*;
-* :func:`lateral_velocities` is the two-image version the course used first (match each piece to
-  the previous image's, average with the previous estimate), kept for the comparison;
 * :class:`MotionMemory` keeps the tracks between decisions;
 * :class:`WalkingMap` is the mapping planner's map (:class:`~husky_course.planners.perception.EgoMap`)
   whose points carry those velocities and walk on between images: what both planners of the moving
@@ -95,39 +93,6 @@ def piece_centre(points: np.ndarray, camera_x: float, radius: float, iterations:
         step = np.linalg.lstsq(jac, -np.r_[n - r, r - radius], rcond=None)[0]
         c, r = c + step[:2], float(np.clip(r + step[2], 0.4 * radius, 2.0 * radius))
     return c
-
-
-def lateral_velocities(
-    previous: np.ndarray,
-    current: np.ndarray,
-    max_step: float,
-    previous_v: np.ndarray | None = None,
-    camera_x: float = 0.45,
-    radius: float = 0.25,
-    spacing: float = 0.0,
-    x_gate: float = 0.3,
-    gap: float = 0.3,
-) -> np.ndarray:
-    """Estimated lateral displacement per step ``(m,)`` of every point of ``current`` (see the module).
-
-    ``previous`` and ``current`` are scans in the *current* robot frame, ``previous_v`` the
-    velocities estimated for ``previous`` (or ``None``); ``max_step`` bounds how far a piece can
-    move across in one step (a match further away is no match).
-    """
-    v = np.zeros(len(current))
-    before = segments(previous, gap, spacing)
-    if not before or not len(current):
-        return v
-    centres = np.array([piece_centre(previous[idx], camera_x, radius) for idx in before])
-    known = np.array([0.0 if previous_v is None else float(np.mean(previous_v[idx])) for idx in before])
-    for idx in segments(current, gap, spacing):
-        cx, cy = piece_centre(current[idx], camera_x, radius)
-        dy = cy - centres[:, 1]
-        ok = np.flatnonzero((np.abs(centres[:, 0] - cx) < x_gate) & (np.abs(dy) <= max_step))
-        if ok.size:
-            i = ok[np.argmin(np.abs(dy[ok] - known[ok]))]
-            v[idx] = dy[i] if known[i] == 0 else (dy[i] + known[i]) / 2
-    return v
 
 
 class Tracks:

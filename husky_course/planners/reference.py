@@ -1,8 +1,12 @@
-"""Reference planners with perfect perception of what the camera has shown (chapters 8 and 10).
+"""Reference planners: perfect perception of what the camera has shown (chapters 8 and 10).
 
-:class:`SeenObstaclesPlanner` is an *analysis* tool, privileged on purpose: it replans at every
-step with the oracle's exact lattice search, but over only some obstacles, with their true
-geometry (perfect perception):
+Every planner here is privileged on purpose (``privileged = True``: it is handed the simulator and
+the true pose) and is an *analysis* tool, never a candidate: the book measures gaps with them and
+ranks none of them. :func:`~husky_course.planners.registry.make_planner` builds them by the names in
+:data:`~husky_course.planners.registry.REFERENCE_PLANNERS`, apart from the planners a student picks.
+
+:class:`SeenObstaclesPlanner` replans at every step with the oracle's exact lattice search, but
+over only some obstacles, with their true geometry (perfect perception):
 
 * ``memory=False``: the obstacles the current image renders
   (:meth:`~husky_course.sim.fast.FastSimulator.visible_obstacles`);
@@ -11,7 +15,7 @@ geometry (perfect perception):
 The side walls are always known. The gap between the two is what memory buys a planner that
 perceives perfectly; the gap between ``memory=True`` and the oracle (every obstacle, seen or not)
 is what the unseen costs a planner that takes unseen space as free. They are references, not
-ceilings: a camera-based planner that is cautious about unseen space is bounded by neither (only
+bounds: a camera-based planner that is cautious about unseen space is bounded by neither (only
 the oracle bounds every planner). Both read the course as it stands at time 0 (the static course).
 
 :class:`SnapshotPlanner` is chapter 10's counterpart on the moving course: every cylinder where it
@@ -31,16 +35,16 @@ from dataclasses import replace
 import numpy as np
 
 from ..config import OracleConfig
-from ..planners.base import EpisodeStart, Planner
-from ..planners.discs import DiscMap, DiscPlanner, majority_cylinder
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 from ..sim.world import World
+from .base import EpisodeStart, Planner
+from .discs import DiscMap, DiscPlanner, majority_cylinder
 
 
-class _Ceiling(Planner):
-    """What the ceiling planners share: privileged, replanning at every step with the oracle's exact
+class _Reference(Planner):
+    """What the reference planners share: privileged, replanning at every step with the oracle's exact
     lattice search (its cap and quantum), counting steps; subclasses choose which obstacles it sees."""
 
     privileged = True  # they read the true geometry of the world: analysis tools only
@@ -76,7 +80,7 @@ class _Ceiling(Planner):
         self._remaining -= 1
 
 
-class SeenObstaclesPlanner(_Ceiling):
+class SeenObstaclesPlanner(_Reference):
     """Exact replanning over the obstacles seen now (or ever): perfect perception, no more."""
 
     def __init__(self, memory: bool, oracle: OracleConfig | None = None) -> None:
@@ -102,7 +106,7 @@ class SeenObstaclesPlanner(_Ceiling):
         return self._choose_frozen(check, pose)
 
 
-class SeenMotionPlanner(_Ceiling):
+class SeenMotionPlanner(_Reference):
     """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
 
     Privileged, an analysis tool: a reference for a camera-based planner on the moving course (not a
@@ -174,7 +178,7 @@ class SecondLookPlanner(SeenMotionPlanner):
         return replace(world, obstacles=obstacles, speeds=speeds)
 
 
-class SnapshotPlanner(_Ceiling):
+class SnapshotPlanner(_Reference):
     """Exact replanning over every cylinder where it stands *now*, as if it stood still (chapter 10).
 
     Privileged like :class:`SeenObstaclesPlanner`, an analysis tool: at step ``k`` it knows every
