@@ -21,13 +21,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import ray  # installed by `make install` (the `ray` extra): an ImportError here is a failure
+from serial_survival import survival_steps
 
 from husky_course import engines
 from husky_course.cli import main as cli_main
 from husky_course.config import get_profile
 from husky_course.data.collect import collect
 from husky_course.data.dataset import STEP_ARRAYS, VIDEO_ARRAYS, load_dataset
-from husky_course.data.labels import survival_at, survival_steps, survival_steps_parallel
+from husky_course.data.labels import survival_at, survival_steps_parallel
 from husky_course.engines import map_tasks, ray_init_args, resolve_engine
 from husky_course.evaluation.episodes import evaluate
 from husky_course.planners.base import PlannerError

@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from serial_survival import survival_steps
 
 from husky_course.config import get_profile
 from husky_course.data.dataset import load_dataset
-from husky_course.data.labels import primitive_outcomes, survival_steps, survival_steps_parallel
+from husky_course.data.labels import primitive_outcomes, survival_steps_parallel
 from husky_course.evaluation.horizons import horizon_errors
 from husky_course.models.rnn import RNNLookahead
 from husky_course.models.safety import JointModel, SurvivalNet

@@ -4,9 +4,10 @@ The dataset records what happened to *one* primitive per image. The simulator ca
 because every image carries its world seed and pose:
 
 * :func:`primitive_outcomes` -- whether each of the 25 primitives would collide from there;
-* :func:`survival_steps` -- for each primitive, how many steps the best continuation that starts
-  with it stays collision-free (the oracle's own lattice search,
-  :mod:`husky_course.sim.lattice`, used to distil it into a network);
+* :func:`survival_steps_parallel` -- for each primitive, how many steps the best continuation that
+  starts with it stays collision-free (the oracle's own lattice search,
+  :mod:`husky_course.sim.lattice`, used to distil it into a network; :func:`survival_at` for any
+  states, in chunks on :func:`husky_course.engines.map_tasks`);
 * :func:`nearest_obstacle_distance` -- the distance (m) to the nearest obstacle in view.
 
 All three group images by world so each world is loaded once, and ask at each image's time (its
@@ -48,31 +49,6 @@ def primitive_outcomes(
         times = np.repeat(np.asarray(ds.step[idx[rows]], float), len(ks))
         paths = sim.library.paths_from(np.repeat(poses, len(ks), 0), np.tile(ks, len(poses)))
         out[rows] = sim.contacts(paths, times).any(1).reshape(len(poses), len(ks))
-    return out
-
-
-def survival_steps(
-    ds: Dataset,
-    horizon: int,
-    idx: np.ndarray | None = None,
-    config: SimConfig | None = None,
-    progress: bool = False,
-) -> np.ndarray:
-    """Steps (0..``horizon``) the best continuation starting with each primitive survives, ``(n, 25)``.
-
-    The search is the oracle's exact lattice search (:func:`best_continuations`).
-    """
-    if horizon < 1:
-        raise ValueError(f"horizon must be >= 1, got {horizon}")
-    sim = FastSimulator(config)
-    lib = sim.library
-    idx, groups = _by_world(ds, idx)
-    out = np.zeros((len(idx), lib.n), np.int8)
-    for seed, rows in tqdm(groups, desc="survival", disable=not progress, leave=False):
-        sim.load(seed)
-        for r in rows:
-            pose, t = np.asarray(ds.poses[idx[r]], float), int(ds.step[idx[r]])
-            out[r] = best_continuations(sim, pose, horizon, t)
     return out
 
 
@@ -138,7 +114,10 @@ def survival_steps_parallel(
     workers: int = 2,
     progress: bool = True,
 ) -> np.ndarray:
-    """:func:`survival_steps` computed by ``workers`` processes (same result, in chunks)."""
+    """Steps (0..``horizon``) the best continuation starting with each primitive survives from each
+    image ``idx`` (at its pose and time), ``(n, 25)`` int8: :func:`survival_at` on the images' states,
+    by ``workers`` processes (:func:`best_continuations` for each; the same result for any engine
+    or number of workers)."""
     idx = np.arange(len(ds)) if idx is None else np.asarray(idx)
     seeds = ds.world_seeds[ds.episode[idx]]
     poses, times = np.asarray(ds.poses[idx], float), np.asarray(ds.step[idx], float)
