@@ -1,9 +1,12 @@
 """The one artifact store: datasets, labels and checkpoints under ``artifacts/<profile>/``.
 
 Every artifact's directory name is a hash of what made it -- the config, the *content* hash of
-the dataset it came from (the sha256 sums in the dataset's ``meta.json``), the architecture and
-the training settings -- never a file path, so a store copied or re-cloned elsewhere is reused as
-it is, and a changed config builds a new artifact instead of silently reusing a stale one.
+the dataset it came from (the sha256 sums in the dataset's ``meta.json``), the architecture, the
+training settings and the fingerprint of the code that builds it
+(:func:`~husky_course.data.code.code_fingerprint`: docstrings and comments left out) -- never a file
+path, so a store copied or re-cloned elsewhere is reused as it is, and a changed config or a changed
+function builds a new artifact instead of silently reusing a stale one. ``python -m husky_course
+clean --dry-run`` lists the artifacts no current code or config would make.
 
 Two kinds of calls, and only two:
 
@@ -23,6 +26,7 @@ from pathlib import Path
 
 from ..config import Profile, check_profile, config_hash, world_flag
 from ..progress import announce_build
+from .code import code_fingerprint
 from .collect import collect, collection_spec
 from .dataset import Dataset, load_dataset
 from .io import DatasetError
@@ -45,13 +49,14 @@ def dataset_dir(profile: Profile) -> Path:
     """Directory of the profile's random-policy dataset (it may not exist yet)."""
     data = check_profile(profile).data
     spec = collection_spec(profile, data.videos, data.seed, data.backend)
-    return artifacts_root() / profile.name / f"dataset-{config_hash(spec)}"
+    key = {**spec, "code": code_fingerprint("husky_course.data.collect")}
+    return artifacts_root() / profile.name / f"dataset-{config_hash(key)}"
 
 
 def _missing_dataset(profile: Profile, path: Path) -> DatasetError:
     return DatasetError(
         f"no {profile.name} dataset in the artifact store ({path}): build it with "
-        f"`python -m husky_course collect --profile {profile.name}`"
+        f"`python -m husky_course collect --profile {profile.name}{world_flag(profile.sim)}`"
     )
 
 

@@ -31,6 +31,7 @@ import numpy as np
 import torch
 
 from ..config import MemoryConfig, Profile, SimConfig, to_dict, world_flag
+from ..data.code import code_fingerprint
 from ..data.io import DatasetError, atomic_save_npz, atomic_write_bytes, load_npz
 from ..data.store import model_dir
 from ..engines import ENGINE, map_tasks
@@ -47,6 +48,7 @@ from .statistics import clopper_pearson
 
 BLOCK = 1_000  #: worlds per stored block (the unit of resumable work)
 FORMAT = 2
+KEY_FILE = "key.json"  #: the fingerprint the directory's name hashes, as built
 
 
 @dataclass
@@ -112,12 +114,16 @@ class CertificateResult:
         }
 
 
+#: what computes the certificate (with its imports: the posterior, the student planner, episodes)
+CERTIFICATE_CODE = (__name__,)
+
+
 def certificate_fingerprint(profile: Profile) -> dict:
     """What determines the certificate: the student, the guarantee config (but its held-out worlds),
-    the simulator, the format."""
+    the simulator, the format and the code that computes it (:data:`CERTIFICATE_CODE`)."""
     guarantee = {k: v for k, v in to_dict(profile.guarantee).items() if not k.startswith("heldout_")}
     return {"format": FORMAT, "block": BLOCK, "student": final_fingerprint(profile),
-            "guarantee": guarantee, "sim": to_dict(profile.sim)}
+            "guarantee": guarantee, "sim": to_dict(profile.sim), "code": code_fingerprint(*CERTIFICATE_CODE)}
 
 
 def certificate_dir(profile: Profile) -> Path:
@@ -240,6 +246,8 @@ def get_certificate(
     model, _, _ = load_memory(profile)
     check_confidence(g.delta, g.delta_prime)  # before any work
     run.mkdir(parents=True, exist_ok=True)
+    if not (run / KEY_FILE).is_file():  # its guarantee config, for `clean` (a `certify` scale is kept)
+        atomic_write_bytes(run / KEY_FILE, json.dumps(certificate_fingerprint(profile), indent=1).encode())
     post_path = run / "posterior.npz"
     if not post_path.is_file():
         atomic_save_npz(post_path, fit_posterior(model, profile, progress).arrays())

@@ -13,8 +13,13 @@ A run's key is everything its result depends on:
   model or a changed parameter is a new key, never a stale hit;
 * the worlds (how many, which evaluation set), the course (backend, simulator config), the step
   limit and whether paths are kept;
-* the source code of the whole ``husky_course`` package: any change to the library runs every
-  evaluation again.
+* the code that ran it (:func:`evaluation_code`): the modules of the planner and of every object
+  in its state, the episode loop and this module, with their imports, docstrings and comments left
+  out (:func:`~husky_course.data.code.code_fingerprint`): an edit that can change the numbers runs
+  the evaluation again, a docstring does not.
+
+Each stored file records that code fingerprint and the modules it covers, so ``python -m
+husky_course clean`` can tell a run that no current code would make (:func:`stale_evaluation`).
 
 A planner whose state cannot be fingerprinted (an attribute of a type this module does not know)
 is evaluated without the store. Timings (``ms_per_decision``) are those of the stored run. Files are
@@ -36,7 +41,8 @@ import torch
 from torch import nn
 
 from ..config import Profile, SimConfig, check_profile, config_hash
-from ..data.io import atomic_save_npz, load_npz
+from ..data.code import code_fingerprint, module_path
+from ..data.io import DatasetError, atomic_save_npz, load_npz
 from ..data.store import artifacts_root
 from ..planners.base import Planner
 from .episodes import Episode, EvalResult, evaluate
@@ -48,18 +54,16 @@ class Unfingerprintable(TypeError):
     """A planner attribute of a type :func:`planner_fingerprint` does not know how to hash."""
 
 
-@functools.cache
-def source_fingerprint() -> str:
-    """sha256 of every ``.py`` file of the ``husky_course`` package (relative path and bytes)."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
-    return h.hexdigest()
+#: what runs every stored evaluation, besides the planner's own modules
+EVALUATION_CODE = ("husky_course.evaluation.episodes", __name__)
 
 
-def _feed(h: Any, obj: object, seen: set[int]) -> None:
-    """Hash ``obj`` into ``h`` (see :func:`planner_fingerprint`)."""
+def _feed(h: Any, obj: object, seen: set[int], modules: set[str]) -> None:
+    """Hash ``obj`` into ``h`` (see :func:`planner_fingerprint`); the module of its type (and of a
+    function or class, its own) joins ``modules``."""
+    modules.add(type(obj).__module__)
+    if callable(obj) and hasattr(obj, "__qualname__"):
+        modules.add(str(getattr(obj, "__module__", "")))
     if isinstance(obj, _SCALARS):
         h.update(f"{type(obj).__name__}:{obj!r};".encode())
         return
@@ -75,41 +79,68 @@ def _feed(h: Any, obj: object, seen: set[int]) -> None:
     elif isinstance(obj, nn.Module):
         h.update(f"module {obj!r} training={obj.training};".encode())  # the architecture
         for name, value in obj.state_dict().items():
-            _feed(h, name, seen)
-            _feed(h, value, seen)
-        _feed(h, {k: v for k, v in vars(obj).items() if not k.startswith("_") and k != "training"}, seen)
+            _feed(h, name, seen, modules)
+            _feed(h, value, seen, modules)
+        state = {k: v for k, v in vars(obj).items() if not k.startswith("_") and k != "training"}
+        _feed(h, state, seen, modules)
     elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         h.update(f"dataclass {type(obj).__qualname__};".encode())
         for f in dataclasses.fields(obj):
-            _feed(h, f.name, seen)
-            _feed(h, getattr(obj, f.name), seen)
+            _feed(h, f.name, seen, modules)
+            _feed(h, getattr(obj, f.name), seen, modules)
     elif isinstance(obj, dict):
         h.update(f"dict{len(obj)};".encode())
         for key, value in obj.items():
-            _feed(h, key, seen)
-            _feed(h, value, seen)
+            _feed(h, key, seen, modules)
+            _feed(h, value, seen, modules)
     elif isinstance(obj, (list, tuple)):
         h.update(f"{type(obj).__name__}{len(obj)};".encode())
         for item in obj:
-            _feed(h, item, seen)
+            _feed(h, item, seen, modules)
     elif isinstance(obj, (set, frozenset)):
-        _feed(h, sorted(obj, key=repr), seen)
+        _feed(h, sorted(obj, key=repr), seen, modules)
     elif isinstance(obj, np.random.Generator):
-        _feed(h, obj.bit_generator.state, seen)
+        _feed(h, obj.bit_generator.state, seen, modules)
     elif callable(obj) and hasattr(obj, "__qualname__") and not hasattr(obj, "__dict__"):
         h.update(f"callable {obj.__module__}.{obj.__qualname__};".encode())
     elif hasattr(obj, "__dict__") and type(obj).__module__.startswith("husky_course"):
         h.update(f"object {type(obj).__module__}.{type(obj).__qualname__};".encode())
-        _feed(h, vars(obj), seen)
+        _feed(h, vars(obj), seen, modules)
     else:
         raise Unfingerprintable(f"cannot fingerprint a {type(obj).__module__}.{type(obj).__qualname__}")
 
 
+def _walk(planner: Planner) -> tuple[str, list[str]]:
+    """``(state hash, package modules of the types in it)`` (raises :class:`Unfingerprintable`)."""
+    h, modules = hashlib.sha256(), set[str]()
+    _feed(h, planner, set(), modules)
+    return h.hexdigest(), sorted(m for m in modules if module_path(m) is not None)
+
+
 def planner_fingerprint(planner: Planner) -> str:
     """sha256 of a planner's class and whole state (raises :class:`Unfingerprintable`)."""
-    h = hashlib.sha256()
-    _feed(h, planner, set())
-    return h.hexdigest()
+    return _walk(planner)[0]
+
+
+def evaluation_code(planner: Planner) -> tuple[str, list[str]]:
+    """``(code fingerprint, modules)``: the code a stored run of ``planner`` depends on -- the modules
+    of its class and of every object in its state, and :data:`EVALUATION_CODE` (with their imports)."""
+    return _code(_walk(planner)[1])
+
+
+def _code(planner_modules: list[str]) -> tuple[str, list[str]]:
+    modules = sorted({*planner_modules, *EVALUATION_CODE})
+    return code_fingerprint(*modules), modules
+
+
+def stale_evaluation(path: Path) -> bool:
+    """Whether no current code would make the stored run at ``path``: its recorded code fingerprint
+    differs from today's over the same modules (or it records none, or cannot be read)."""
+    try:
+        meta = json.loads(str(load_npz(path)["meta"]))
+        return meta["code"] != code_fingerprint(*meta["code_modules"])
+    except (DatasetError, KeyError, ValueError, TypeError, OSError):
+        return True
 
 
 def evaluation_path(
@@ -117,16 +148,18 @@ def evaluation_path(
     backend: str = "fast", max_primitives: int | None = None, keep_paths: bool = True,
 ) -> Path:
     """Where :func:`evaluate_stored` keeps this run (raises :class:`Unfingerprintable`)."""
-    key = {"planner": planner_fingerprint(planner), "worlds": int(worlds), "seed": int(seed),
+    state, modules = _walk(planner)
+    key = {"planner": state, "worlds": int(worlds), "seed": int(seed),
            "backend": backend, "sim": config_hash(config), "max_primitives": max_primitives,
-           "keep_paths": bool(keep_paths), "source": source_fingerprint()}
+           "keep_paths": bool(keep_paths), "code": _code(modules)[0]}
     root = artifacts_root() / check_profile(profile).name / "evaluations"
     return root / f"{planner.name.replace(' ', '_')}-{config_hash(key)}.npz"
 
 
-def _save(path: Path, result: EvalResult) -> None:
+def _save(path: Path, result: EvalResult, code: tuple[str, list[str]]) -> None:
     eps = result.episodes
-    meta = {**dataclasses.asdict(dataclasses.replace(result, episodes=[])), "episodes": len(eps)}
+    meta = {**dataclasses.asdict(dataclasses.replace(result, episodes=[])), "episodes": len(eps),
+            "code": code[0], "code_modules": code[1]}
     arrays = {
         "meta": np.array(json.dumps(meta)),
         "world_seed": np.array([e.world_seed for e in eps], np.int64),
@@ -147,6 +180,8 @@ def _load(path: Path) -> EvalResult:
     a = load_npz(path)
     meta = json.loads(str(a.pop("meta")))
     n = meta.pop("episodes")
+    meta.pop("code", None)
+    meta.pop("code_modules", None)
     meta["success_ci95"] = tuple(meta["success_ci95"])
     ends = np.cumsum(a["n_actions"])
     starts = ends - a["n_actions"]
@@ -182,5 +217,5 @@ def evaluate_stored(
     if path.is_file():
         return _load(path)
     result = run()
-    _save(path, result)
+    _save(path, result, evaluation_code(planner))
     return result

@@ -29,8 +29,8 @@ from ..config import ModelDims, SimConfig, world_kind
 from .base import DEFAULT_DIMS, make_spec, mlp
 from .paper import Encoder
 
-#: what the moving-course student's four channels hold (part of its artifact's fingerprint, so a
-#: change of representation retrains it): see :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
+#: what the moving-course student's four channels hold: see
+#: :meth:`husky_course.planners.memory.MemoryPlanner.prepare`
 MOVING_INPUTS = (
     "walking map (tracked fitted circles, weighted line over four looks, judged against the motion "
     "model); map one step ahead; map at the robot's arrival (x / advance steps); points seen once"
@@ -53,8 +53,7 @@ class MemoryNet(nn.Module):
     ) -> None:
         super().__init__()
         c1, c2, hidden = self.HIDDEN
-        extra = (channels,) if channels != 1 else ()  # the static student's spec predates channels
-        self.spec = make_spec("memory", dims, (*self.HIDDEN, map_cells, horizon, *extra))
+        self.spec = make_spec("memory", dims, (*self.HIDDEN, map_cells, horizon, channels))
         self.horizon, self.map_cells, self.channels = int(horizon), int(map_cells), int(channels)
         self.encoder = Encoder(dims)
         self.map_net = nn.Sequential(

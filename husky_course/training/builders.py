@@ -10,8 +10,11 @@
 * ``distilled`` -- the oracle distilled into a network, from the simulator's survival labels.
 
 A checkpoint lives at ``artifacts/<profile>/models/<name>-<hash>/model.pt``, the hash taken over
-its *fingerprint*: the model's spec, the dataset's content hash, the training config and, where
-one model builds on another, the other's fingerprint (never a path). ``get_<name>`` trains only
+its *fingerprint*: the model's spec, the dataset's content hash, the training config, the code that
+trains it (:func:`code_fingerprint` of the model's module, the trainer, the data preparation and
+this module's own statements: :func:`model_code`) and, where one model builds on another (or on
+the survival labels), the other's fingerprint (never a path). A changed label function is a new
+labels key, hence a new ``distilled`` key; a docstring changes none. ``get_<name>`` trains only
 when no finished checkpoint has the same fingerprint; :func:`load` never trains and never
 collects, and a missing checkpoint is a :class:`~husky_course.training.trainer.CheckpointError`
 naming the command that builds it. Training is seeded and logs to ``runs/<profile>/...`` for
@@ -22,12 +25,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 from torch import Tensor, nn
 
-from ..config import Profile, TrainConfig, check_profile, config_hash, world_flag
+from ..config import Profile, TrainConfig, check_profile, config_hash, to_dict, world_flag
+from ..data.code import code_fingerprint, module_fingerprint
 from ..data.dataset import Dataset
 from ..data.io import DatasetError, atomic_save_npy, load_npy
 from ..data.labels import survival_steps_parallel
@@ -54,6 +59,21 @@ MODELS = ("encoder_decoder", "reward_net", "safety_image", "safety_prim", "joint
 
 Data = tuple[dict[str, Tensor], dict[str, Tensor]]
 
+#: what trains every model here: the loop, the tensors, the splits (with their imports)
+TRAINING_CODE = (
+    "husky_course.training.trainer", "husky_course.training.datasets", "husky_course.data.splits"
+)
+#: what computes the survival labels (the ``labels`` artifact)
+LABELS_CODE = ("husky_course.data.labels",)
+
+
+def model_code(model: nn.Module, *more: str) -> dict:
+    """The code part of a model's fingerprint: the model's module, :data:`TRAINING_CODE` and ``more``
+    (with their imports), and this module's own statements (its imports not followed: they are the
+    other models')."""
+    return {"code": code_fingerprint(type(model).__module__, *TRAINING_CODE, *more),
+            "pipeline": module_fingerprint(__name__)}
+
 
 @dataclass
 class Trained:
@@ -71,12 +91,14 @@ def _parts(
     """A fresh, seeded model of ``name``, its training config and its fingerprint."""
     plan, dims, sizes = profile.train, profile.dims, profile.model
     extra: dict = {}
+    more: tuple[str, ...] = ()
     make: Callable[[], nn.Module]
     if name == "encoder_decoder":
         cfg, make = plan.encoder_decoder, lambda: EncoderDecoder(dims)
     elif name == "reward_net":
         cfg, make = plan.reward_net, lambda: LatentRewardNet(dims)
         extra = {"encoder": config_hash(_parts("encoder_decoder", profile, ds_id)[2])}
+        more = ("husky_course.training.inference",)  # it trains on the encoder's latents
     elif name in ("safety_image", "safety_prim"):
         cfg, make = plan.joint, lambda: SafetyNet(name == "safety_prim", dims)
     elif name == "joint":
@@ -84,18 +106,25 @@ def _parts(
     elif name == "rnn":
         cfg, make, extra = plan.rnn, lambda: RNNLookahead(dims), {"h": sizes.rnn_horizon}
     elif name == "distilled":
-        cfg, extra = plan.distilled, {"h": sizes.distill_horizon}
+        labels = config_hash(labels_key(profile, ds_id))  # new labels, a new model
+        cfg, extra = plan.distilled, {"h": sizes.distill_horizon, "labels": labels}
         make = lambda: SurvivalNet(sizes.distill_horizon, dims)  # noqa: E731
     else:
         raise ValueError(f"unknown model {name!r}: choose one of {', '.join(MODELS)}")
     torch.manual_seed(cfg.seed)  # the initial weights depend on the seed alone
     model = make()
-    fingerprint = {"model": model.spec.to_dict(), "dataset": ds_id, "train": asdict(cfg), **extra}  # type: ignore[union-attr]
+    fingerprint = {"model": model.spec.to_dict(), "dataset": ds_id, "train": asdict(cfg),  # type: ignore[union-attr]
+                   **model_code(model, *more), **extra}
     return model, cfg, fingerprint
 
 
 def _checkpoint(name: str, fingerprint: dict, profile: Profile):
     return model_dir(name, fingerprint, profile) / "model.pt"
+
+
+def checkpoint_dir(name: str, profile: Profile, ds_id: str, safety_weight: float = 1.0) -> Path:
+    """The directory today's code and ``profile`` give model ``name`` trained on dataset ``ds_id``."""
+    return model_dir(name, _parts(name, profile, ds_id, safety_weight)[2], profile)
 
 
 def load(name: str, profile: Profile, safety_weight: float = 1.0) -> Trained:
@@ -230,16 +259,27 @@ def get_rnn(profile: Profile, progress: bool = True) -> Trained:
     return trained
 
 
-def _labels_path(profile: Profile, ds_id: str):
-    key = {"dataset": ds_id, "survival_h": profile.model.distill_horizon}
-    return model_dir("labels", key, profile) / "survival.npy"
+def labels_key(profile: Profile, ds_id: str) -> dict:
+    """What determines the survival labels: the dataset's content, the horizon, the simulator and the
+    code that computes them (:data:`LABELS_CODE` and its imports)."""
+    return {"dataset": ds_id, "survival_h": profile.model.distill_horizon, "sim": to_dict(profile.sim),
+            "code": code_fingerprint(*LABELS_CODE)}
+
+
+def labels_dir(profile: Profile, ds_id: str) -> Path:
+    """Directory of the survival labels of the dataset ``ds_id`` (it may not exist yet)."""
+    return model_dir("labels", labels_key(profile, ds_id), profile)
+
+
+def _labels_path(profile: Profile, ds_id: str) -> Path:
+    return labels_dir(profile, ds_id) / "survival.npy"
 
 
 def get_survival_labels(profile: Profile, progress: bool = True) -> np.ndarray:
     """Simulator survival labels ``(N, n_primitives)`` for every pool image (built if missing).
 
-    Horizon ``profile.model.distill_horizon``; cached as an artifact keyed by the dataset's
-    content and the horizon; computed by 2 worker processes.
+    Horizon ``profile.model.distill_horizon``; cached as an artifact keyed by :func:`labels_key`;
+    computed by 2 worker processes.
     """
     ds = get_dataset(profile, progress=progress)
     path = _labels_path(profile, dataset_id(ds))

@@ -13,6 +13,7 @@ from pathlib import Path
 import torch
 
 from ..config import Profile, to_dict, with_world
+from ..data.code import code_fingerprint
 from ..data.store import model_dir
 from ..models.discs import PIECE_FEATURES, DiscNet
 from .trainer import CheckpointError, History, load_model
@@ -24,8 +25,14 @@ def new_disc_net(profile: Profile) -> DiscNet:
     return DiscNet(profile.sim.world.radius_range)
 
 
+#: what makes the disc network (its views, the planner's piece reader, the fit), named here and
+#: hashed with its imports, never imported (a higher stage)
+DISCS_CODE = ("husky_course.imitation.discs",)
+
+
 def disc_fingerprint(profile: Profile) -> dict:
-    """What determines the disc network: its spec, its views and labels, the simulator.
+    """What determines the disc network: its spec, its views and labels, the simulator and the code
+    that makes it (:data:`DISCS_CODE`).
 
     One network serves both courses: it reads the geometry of one image, and the moving course at
     time 0 is the static course of the same seed, so it is always the static course's (a profile of
@@ -35,7 +42,7 @@ def disc_fingerprint(profile: Profile) -> dict:
     cfg = profile.discs
     views = {k: v for k, v in to_dict(cfg).items() if k in ("collection_seed", "worlds", "poses_per_world")}
     return {"model": new_disc_net(profile).spec.to_dict(), "views": views, "features": PIECE_FEATURES,
-            "sim": to_dict(profile.sim)}
+            "sim": to_dict(profile.sim), "code": code_fingerprint(*DISCS_CODE)}
 
 
 def disc_dir(profile: Profile) -> Path:

@@ -13,8 +13,9 @@ from pathlib import Path
 import torch
 
 from ..config import OracleConfig, Profile, to_dict, world_flag
+from ..data.code import code_fingerprint
 from ..data.store import model_dir
-from ..models.memory import MOVING_INPUTS, MemoryNet, map_channels
+from ..models.memory import MemoryNet, map_channels
 from .trainer import CheckpointError, History, load_model
 
 
@@ -25,17 +26,21 @@ def new_memory_net(profile: Profile) -> MemoryNet:
     return MemoryNet(mem.label_horizon, mem.map_cells, profile.dims, map_channels(profile.sim))
 
 
+#: what trains the student (DAgger: the rollouts, the teacher, the labels, the student planner's
+#: inputs, the fit), named here and hashed with its imports, never imported (a higher stage)
+MEMORY_CODE = ("husky_course.imitation.dagger",)
+
+
 def memory_fingerprint(profile: Profile) -> dict:
-    """What determines the student: its network, the memory config, the simulator and the teacher."""
-    found = {
+    """What determines the student: its network, the memory config, the simulator, the teacher and
+    the code that trains it (:data:`MEMORY_CODE`)."""
+    return {
         "model": new_memory_net(profile).spec.to_dict(),
         "memory": to_dict(profile.memory),
         "sim": to_dict(profile.sim),
         "teacher": {"planner": "oracle", **asdict(OracleConfig())},
+        "code": code_fingerprint(*MEMORY_CODE),
     }
-    if map_channels(profile.sim) > 1:  # the moving course's inputs (the static student's key predates this)
-        found["inputs"] = MOVING_INPUTS
-    return found
 
 
 def memory_dir(profile: Profile) -> Path:
