@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 PROFILE ?= full
 unexport MPLBACKEND  # kernels must use the inline backend, or notebooks lose their figures
 
-.PHONY: book test install data lint sync lab bench clean
+.PHONY: book book-cache test install data lint sync lab bench clean
 
 # torch's CPU build: requirements.txt pins the release, and on Linux PyPI's build of it is the CUDA one
 # (several GB). The PyTorch CPU index has the same release for the CPU alone (an extra index: where it
@@ -42,13 +42,24 @@ data: install  ## build the dataset and train the models the chapters need, once
 	$(PY) -m husky_course train memory --world moving --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
-	@# jupyter-book's execution cache knows notebooks, not HUSKY_PROFILE: drop it when the profile changes
-	@if [ -f _build/.profile ] && [ "$$(cat _build/.profile)" != "$(PROFILE)" ]; then \
-		echo "profile changed to $(PROFILE): clearing the execution cache and the built pages"; \
-		rm -rf _build/.jupyter_cache _build/.doctrees _build/html _build/jupyter_execute; fi
-	@mkdir -p _build && echo "$(PROFILE)" > _build/.profile
+	@$(MAKE) --no-print-directory book-cache
 	HUSKY_PROFILE=$(PROFILE) HUSKY_STATIC_WIDGETS=1 $(VENV)/bin/jupyter-book build . -W -n --keep-going
 	@echo "The book is at $(CURDIR)/_build/html/index.html"
+
+# jupyter-book's execution cache knows the notebooks' code, neither HUSKY_PROFILE nor the library's:
+# `make book` drops it (and the pages built from it) when the profile or the library's code changed
+# since the last build (`python -m husky_course fingerprint`: docstrings and comments left out, so
+# editing one re-executes nothing). tests/test_fingerprints.py runs this target in a scratch folder.
+LIBRARY_FINGERPRINT ?= $(PY) -m husky_course fingerprint
+book-cache:
+	@lib=$$($(LIBRARY_FINGERPRINT)); why=; \
+	if [ -f _build/.profile ] && [ "$$(cat _build/.profile)" != "$(PROFILE)" ]; then \
+		why="profile changed to $(PROFILE)"; \
+	elif [ -d _build/.jupyter_cache ] && [ "$$(cat _build/.library 2>/dev/null || true)" != "$$lib" ]; then \
+		why="the library's code changed"; fi; \
+	if [ -n "$$why" ]; then echo "$$why: clearing the execution cache and the built pages"; \
+		rm -rf _build/.jupyter_cache _build/.doctrees _build/html _build/jupyter_execute; fi; \
+	mkdir -p _build && echo "$(PROFILE)" > _build/.profile && echo "$$lib" > _build/.library
 
 lint: install
 	$(VENV)/bin/ruff check husky_course tests benchmarks chapters

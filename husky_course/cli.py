@@ -1,4 +1,4 @@
-"""Command line: ``python -m husky_course {collect,stats,train,evaluate,certify} ...``.
+"""Command line: ``python -m husky_course {collect,stats,train,evaluate,certify,clean,fingerprint} ...``.
 
 Examples
 --------
@@ -12,6 +12,8 @@ Examples
 ``python -m husky_course evaluate --planner memory --world moving --trained-on static``
 ``python -m husky_course certify --profile full --worlds 2000 --workers 2`` (chapter 9's certificate,
 at another scale: its own artifact; ``train certificate`` builds the profile's)
+``python -m husky_course clean --profile full --dry-run`` (the artifacts no current code or config makes)
+``python -m husky_course fingerprint`` (the library's code, docstrings and comments left out: ``make book``)
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from dataclasses import replace
 
 from .checks import check_int
 from .config import PROFILES, WORLD_KINDS, ConfigError, get_profile, with_world
+from .data.code import library_fingerprint
 from .data.collect import collect
 from .data.dataset import load_dataset, stats
 from .data.io import DatasetError
@@ -124,6 +127,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--workers", type=int, default=2, help="local processes, or a local Ray cluster's CPUs")
     g.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     _engine_option(g)
+    k = sub.add_parser("clean", help="delete the artifacts no current code or config would make")
+    k.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
+    k.add_argument("--dry-run", action="store_true", help="only list them")
+    sub.add_parser("fingerprint", help="print the fingerprint of the library's code (docstrings left out)")
     return parser
 
 
@@ -272,6 +279,22 @@ def _certify(args: argparse.Namespace) -> dict:
     return {**found.to_json(), "path": found.path}
 
 
+def _clean(args: argparse.Namespace) -> None:
+    """Run the ``clean`` subcommand: list the stale artifacts, and delete them unless ``--dry-run``."""
+    from .evaluation.stale import remove, sweep
+
+    found = sweep(get_profile(args.profile))
+    for path in found.stale:
+        print(f"{'stale' if args.dry_run else 'removed'} {path}")
+    for path in found.unchecked:
+        print(f"kept (not checked) {path}")
+    if not args.dry_run:
+        remove(found.stale)
+    verb = "would remove" if args.dry_run else "removed"
+    kept = f"kept {len(found.current)} current and {len(found.unchecked)} not checked"
+    print(f"{verb} {len(found.stale)}, {kept}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the process exit code."""
     args = build_parser().parse_args(argv)
@@ -307,6 +330,10 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{key:28s} {value}")
         elif args.command == "train":
             print(json.dumps(_train(args), indent=1))
+        elif args.command == "clean":
+            _clean(args)
+        elif args.command == "fingerprint":
+            print(library_fingerprint())
         elif args.command == "certify":
             print(json.dumps(_certify(args), indent=1))
         elif args.command == "evaluate":
