@@ -326,7 +326,7 @@ class DiscTrackingPlanner(DiscPlanner):
     is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
 
     name = "discs"
-    plan = TrackingPlanner.plan
+    _edge_check = TrackingPlanner._edge_check
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,

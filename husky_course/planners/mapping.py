@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
-from ..sim.lattice import expand_with, rank_plans
+from ..sim.lattice import EdgeCheck, expand_with, rank_plans
 from .base import EpisodeStart, Planner
 from .perception import DepthScan, EgoMap
 
@@ -43,33 +43,34 @@ class ClearanceGrid:
     The grid covers ``x in [x0, x1]``, ``y in [-y1, y1]`` (robot frame) at ``resolution``.
     """
 
-    def __init__(self, points: np.ndarray, x0: float, x1: float, y1: float, resolution: float, reach: float):
+    def __init__(self, points: np.ndarray, x0: float, x1: float, y1: float, resolution: float, reach: float,
+                 largest: float | None = None):
         self.x0, self.y0, self.res, self.reach = x0, -y1, resolution, reach
         nx, ny = int(np.ceil((x1 - x0) / resolution)) + 1, int(np.ceil(2 * y1 / resolution)) + 1
         grid = np.full((nx, ny), reach)
         points = np.asarray(points, float).reshape(-1, 3)
-        k = int(np.ceil((reach + (points[:, 2].max() if len(points) else 0.0)) / resolution))
+        # every point stamps the cells within k cells of its own (k from the largest radius, or
+        # ``largest`` when the caller left points out; cells further than reach + its radius would
+        # read reach anyway), each cell its distance to the point itself (not to the point's cell
+        # centre) minus the point's radius, capped at reach
+        if largest is None:
+            largest = float(points[:, 2].max()) if len(points) else 0.0
+        k = int(np.ceil((reach + largest) / resolution))
         off = np.arange(-k, k + 1)
-        disc = np.hypot(off[:, None], off[None, :]) * resolution < k * resolution  # the stamp
+        outside = np.hypot(off[:, None], off[None, :]) >= k  # the stamp is a disc of k cells
+        own = np.minimum(k, np.ceil((reach + points[:, 2]) / resolution).astype(int) + 1)  # what can matter
         ix = np.rint((points[:, 0] - x0) / resolution).astype(int)
         iy = np.rint((points[:, 1] - self.y0) / resolution).astype(int)
-        inside = (ix > -k) & (ix < nx + k) & (iy > -k) & (iy < ny + k)
-        points, ix, iy = points[inside], ix[inside], iy[inside]
-        if len(points):
-            # each point's stamp as a (2k+1)^2 block: distance from the cell centres to the point itself
-            # (not to its own cell's centre), minus its radius; cells off the disc stay at ``reach``
-            ax = x0 + (ix[:, None] + off) * resolution - points[:, :1]
-            ay = self.y0 + (iy[:, None] + off) * resolution - points[:, 1:2]
-            d = np.hypot(ax[:, :, None], ay[:, None, :]) - points[:, 2, None, None]
-            np.minimum(d, reach, out=d)
-            d[:, ~disc] = reach
-            for j in range(len(points)):  # the minimum over overlapping blocks, clipped to the grid
-                a0, a1 = max(0, ix[j] - k), min(nx, ix[j] + k + 1)
-                b0, b1 = max(0, iy[j] - k), min(ny, iy[j] + k + 1)
-                if a0 < a1 and b0 < b1:
-                    cells = grid[a0:a1, b0:b1]
-                    np.minimum(cells, d[j, a0 - ix[j] + k : a1 - ix[j] + k, b0 - iy[j] + k : b1 - iy[j] + k],
-                               out=cells)
+        for j in np.flatnonzero((ix > -own) & (ix < nx + own) & (iy > -own) & (iy < ny + own)):
+            a0, a1 = max(0, ix[j] - own[j]), min(nx, ix[j] + own[j] + 1)
+            b0, b1 = max(0, iy[j] - own[j]), min(ny, iy[j] + own[j] + 1)
+            if a0 < a1 and b0 < b1:  # the stamp's block, clipped to the grid
+                ax = x0 + np.arange(a0, a1) * resolution - points[j, 0]
+                ay = self.y0 + np.arange(b0, b1) * resolution - points[j, 1]
+                d = np.sqrt(ax[:, None] ** 2 + ay[None, :] ** 2) - points[j, 2]
+                d[outside[a0 - ix[j] + k : a1 - ix[j] + k, b0 - iy[j] + k : b1 - iy[j] + k]] = reach
+                cells = grid[a0:a1, b0:b1]
+                np.minimum(cells, d, out=cells)
         self.grid = grid
 
     def __call__(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -122,10 +123,32 @@ class MappingPlanner(Planner):
         self._library = start.library
         self._remaining = start.max_primitives
 
-    def _check(self, grid: ClearanceGrid):
+    def _grid(self, points: np.ndarray, horizon: int) -> ClearanceGrid:
+        """The clearance grid of ``points`` ``(m, 3)`` over what a ``horizon``-step plan can reach.
+
+        A point further across than any sample of the lattice can come within the grid's reach of
+        (plus half a cell's diagonal, as a sample reads its nearest cell) is left out: it would
+        change no cell the search reads. Every lattice sample lies within ``|y| <= f(x)``,
+        ``f(x) = spread * max(0, x - x_min) / advance + y_max`` (``x_min``, ``y_max``: the
+        library's own extremes), so a point with ``|y| - R > f(x + R)`` is further than ``R``
+        from all of them.
+        """
+        reach = self.radius + self.margin + self.cap
+        local = self._library.local_paths  # type: ignore[union-attr]
+        far = reach + points[:, 2] + self.resolution / np.sqrt(2)
+        ahead = np.maximum(0.0, points[:, 0] + far - local[:, :, 0].min()) / self.advance
+        keep = np.abs(points[:, 1]) - far <= self.spread * ahead + np.abs(local[:, :, 1]).max()
+        return ClearanceGrid(
+            points[keep], x0=-reach, x1=horizon * self.advance + reach, y1=horizon * self.spread + reach,
+            resolution=self.resolution, reach=reach, largest=float(points[:, 2].max(initial=0.0)),
+        )
+
+    def _edge_check(self, horizon: int) -> EdgeCheck:
+        """How the search judges an edge: its samples' clearance on the map's grid (no time)."""
+        grid = self._grid(self.points, horizon)
         every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
 
-        def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # no time
+        def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             x, y = X[:, ::every], Y[..., ::every]
             clear = grid(np.broadcast_to(x, y.shape), y).min(-1) - self.radius
             return clear < self.margin, clear - self.margin
@@ -138,16 +161,7 @@ class MappingPlanner(Planner):
             raise RuntimeError("call reset(start) before act()")
         self.map.add(obs)
         horizon = max(1, min(self.horizon, self._remaining))
-        reach = self.radius + self.margin + self.cap
-        grid = ClearanceGrid(
-            self.points,
-            x0=-reach,
-            x1=horizon * self.advance + reach,
-            y1=horizon * self.spread + reach,
-            resolution=self.resolution,
-            reach=reach,
-        )
-        lattice = expand_with(self._check(grid), self._library, np.zeros(3), horizon)
+        lattice = expand_with(self._edge_check(horizon), self._library, np.zeros(3), horizon)
         ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
         return int(ranking.choice[0][0]), ranking.keys[0][0]
 

@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
-from ..sim.lattice import expand_with, rank_plans
-from .mapping import ClearanceGrid, MappingPlanner
+from ..sim.lattice import EdgeCheck
+from .mapping import MappingPlanner
 from .motion import WalkingMap
 
 
@@ -55,18 +55,13 @@ class TrackingPlanner(MappingPlanner):
         """Each map point's estimated lateral velocity (m per step)."""
         return self.map.velocity
 
-    def plan(self, obs: np.ndarray) -> tuple[int, np.ndarray]:
-        if self._library is None:
-            raise RuntimeError("call reset(start) before act()")
-        self.map.add(obs)
-        horizon = max(1, min(self.horizon, self._remaining))
-        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))
+    def _edge_check(self, horizon: int) -> EdgeCheck:
+        """Standing points on the mapping planner's clearance grid; each walking point exactly, where
+        it is at every sample's time."""
+        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
         walking = self.velocity != 0
         reach = self.radius + self.margin + self.cap
-        grid = ClearanceGrid(  # the standing points, as the mapping planner's
-            self.points[~walking], x0=-reach, x1=horizon * self.advance + reach,
-            y1=horizon * self.spread + reach, resolution=self.resolution, reach=reach,
-        )
+        grid = self._grid(self.points[~walking], horizon)
         movers, speeds = self.points[walking], self.velocity[walking]
 
         def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -78,6 +73,4 @@ class TrackingPlanner(MappingPlanner):
             clear = gap.min(-1) - self.radius
             return clear < self.margin, clear - self.margin
 
-        lattice = expand_with(check, self._library, np.zeros(3), horizon)
-        ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
-        return int(ranking.choice[0][0]), ranking.keys[0][0]
+        return check
