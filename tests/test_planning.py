@@ -288,3 +288,36 @@ def test_cli_evaluate_bad_input(capsys, args, message):
     rc = cli.main(["evaluate", *args, "--no-progress"])
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("error:") and message in err
+
+
+def test_serial_evaluation_runs_in_the_given_simulator_with_a_bar(capsys):
+    """``evaluate(..., sim=...)`` with the defaults (local engine, one worker) plays every world in that
+    simulator, even one no worker could rebuild, leaves it open, shows its bar, and gives the numbers
+    of the chunked path."""
+    from husky_course.sim.fast import FastSimulator
+
+    class Counting(FastSimulator):  # not a backend a worker can build: only the serial path takes it
+        def __init__(self, config):
+            super().__init__(config)
+            self.loaded, self.closed = [], False
+
+        def _load(self, world):
+            self.loaded.append(world.seed)
+            super()._load(world)
+
+        def close(self):
+            self.closed = True
+
+    sim = Counting(QUICK.sim)
+    planner = make_planner("heuristic")
+    mine = evaluate(planner, 4, seed=2, sim=sim, progress=True)
+    assert sim.loaded == eval_world_seeds(4, 2).tolist() and not sim.closed
+    assert "evaluate heuristic" in capsys.readouterr().err
+    chunked = evaluate(planner, 4, seed=2, config=QUICK.sim, progress=False, worlds_per_task=3, workers=2)
+    timing = ("ms_per_decision", "ms_per_reset")
+    assert {k: v for k, v in mine.to_json().items() if k not in timing} == {
+        k: v for k, v in chunked.to_json().items() if k not in timing
+    }
+    assert mine.seed == 2 and [e.actions for e in mine.episodes] == [e.actions for e in chunked.episodes]
+    with pytest.raises(ValueError, match="cannot be rebuilt in a worker"):
+        evaluate(planner, 2, sim=sim, progress=False, workers=2)

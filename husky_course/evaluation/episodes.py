@@ -8,6 +8,7 @@ Evaluation set ``s`` of size ``n`` is the worlds ``EVAL_SEED_BASE + s * 1_000_00
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -18,7 +19,6 @@ from ..checks import check_int, is_int
 from ..config import EVAL_SEED_BASE, SimConfig
 from ..engines import ENGINE, map_tasks, resolve_engine
 from ..planners.base import Planner, episode_start
-from ..progress import tqdm
 from ..sim.backends import check_backend, make_simulator
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
@@ -209,11 +209,16 @@ def _slim(episode: Episode, keep_path: bool) -> Episode:
 
 
 def _world_chunk(planner: Planner, job: tuple) -> tuple[list[Episode], list[bool]]:
-    """A task: episodes of ``planner`` in a chunk of worlds, on a simulator built here."""
-    backend, config, world_seeds, limit, keep_paths = job
+    """A task: episodes of ``planner`` in a chunk of worlds.
+
+    ``job`` is ``(sim, config, world_seeds, limit, keep_paths)``: ``sim`` is a live simulator (serial
+    work in this process, left open) or a backend name (a worker builds it here from ``config``).
+    """
+    source, config, world_seeds, limit, keep_paths = job
     episodes: list[Episode] = []
     crossable: list[bool] = []
-    with make_simulator(backend, config) as sim:
+    live = not isinstance(source, str)
+    with contextlib.nullcontext(source) if live else make_simulator(source, config) as sim:
         for world_seed in world_seeds:
             episodes.append(_slim(run_episode(planner, sim, int(world_seed), limit), keep_paths))
             if hasattr(planner, "crossable"):
@@ -241,11 +246,12 @@ def evaluate(
     ``max_primitives`` to the simulator's config (10). ``crossable_rate`` is filled in when the
     planner reports ``crossable`` (the oracle).
 
-    With the local engine and one worker (the defaults) the worlds run here, one after the other,
-    in ``sim``. Otherwise (``engine="ray"``, or ``workers > 1``) they run as tasks of
-    ``worlds_per_task`` worlds (default :class:`~husky_course.config.EngineConfig`) on
-    :func:`husky_course.engines.map_tasks`: the planner is pickled to the workers and each task
-    builds its own simulator from the backend's name and config (those of ``sim`` when given).
+    The worlds run as tasks of :func:`husky_course.engines.map_tasks`. With the local
+    engine and one worker (the defaults) they run here, one after the other, in ``sim`` (a world a
+    task). Otherwise (``engine="ray"``, or ``workers > 1``) a task is ``worlds_per_task`` worlds
+    (default :class:`~husky_course.engines.EngineConfig`): the planner is pickled to the workers and
+    each task builds its own simulator from the backend's name and config (those of ``sim`` when
+    given).
     Every planner starts each episode afresh (``reset``), so every field but the timings
     (``ms_per_decision``, ``ms_per_reset``) is the same number on any engine. ``keep_paths=False``
     drops each episode's played-back ``path`` (about 20 kB a world, more than all the rest): what a
@@ -254,21 +260,13 @@ def evaluate(
     seeds = eval_world_seeds(worlds, seed)
     engine = resolve_engine(engine)
     workers = check_int(workers, "workers", 1)
-    if engine == "local" and workers == 1:
+    own = False
+    if engine == "local" and workers == 1:  # here, in ``sim``, a world a task (the bar moves per world)
         own = sim is None
         sim = make_simulator(backend, config) if sim is None else sim
         limit = sim.config.max_primitives if max_primitives is None else max_primitives
-        episodes: list[Episode] = []
-        crossable: list[bool] = []
-        bar = tqdm(seeds, desc=f"evaluate {planner.name}", unit="world", disable=not progress)
-        try:
-            for world_seed in bar:
-                episodes.append(_slim(run_episode(planner, sim, int(world_seed), limit), keep_paths))
-                if hasattr(planner, "crossable"):
-                    crossable.append(bool(planner.crossable))
-        finally:
-            if own:
-                sim.close()
+        jobs = [(sim, None, [world_seed], limit, bool(keep_paths)) for world_seed in seeds]
+        sizes, desc = None, f"evaluate {planner.name}"
     else:
         if sim is not None:
             backend, config = _backend_of(sim), sim.config
@@ -276,19 +274,18 @@ def evaluate(
         limit = config.max_primitives if max_primitives is None else max_primitives
         size = check_int(worlds_per_task or ENGINE.worlds_per_task, "worlds_per_task", 1, EVAL_SET_STRIDE)
         chunks = [seeds[i : i + size] for i in range(0, len(seeds), size)]
+        jobs = [(check_backend(backend), config, chunk, limit, bool(keep_paths)) for chunk in chunks]
+        sizes, desc = [len(c) for c in chunks], f"evaluate {planner.name} ({engine})"
+    try:
         parts = map_tasks(
-            _world_chunk,
-            [(check_backend(backend), config, chunk, limit, bool(keep_paths)) for chunk in chunks],
-            engine=engine,
-            workers=workers,
-            shared=planner,
-            desc=f"evaluate {planner.name} ({engine})",
-            unit="world",
-            sizes=[len(c) for c in chunks],
-            progress=progress,
+            _world_chunk, jobs, engine=engine, workers=workers, shared=planner, desc=desc, unit="world",
+            sizes=sizes, progress=progress,
         )
-        episodes = [e for part, _ in parts for e in part]
-        crossable = [c for _, part in parts for c in part]
+    finally:
+        if own and sim is not None:
+            sim.close()
+    episodes = [e for part, _ in parts for e in part]
+    crossable = [c for _, part in parts for c in part]
     n = len(episodes)
     successes = sum(e.success for e in episodes)
     collisions = sum(e.collided for e in episodes)
