@@ -9,14 +9,28 @@ stages before it (``tests/test_layout.py`` checks this):
 -> ``models/`` -> ``training/`` -> ``planners/`` -> ``evaluation/``
 -> ``course/`` (diagnosis, exercises) and ``ui/`` (plots, widgets) -> ``cli``.
 
-Importing the package registers the Gymnasium environment ``HuskyNav-v0``.
+The Gymnasium environment :data:`ENV_ID` (``HuskyNav-v0``) is registered without importing Gymnasium
+here (``import husky_course.config`` does not need it): importing the package registers it when
+Gymnasium is already imported (``import gymnasium`` first, as sorted imports put it), and importing
+its module, ``husky_course.sim.env``, always does. Then ``gymnasium.make("HuskyNav-v0")`` works.
 """
 
 from __future__ import annotations
 
+import sys
+
 __version__ = "0.1.0"
 
-from gymnasium.envs.registration import register, registry  # noqa: E402
+ENV_ID = "HuskyNav-v0"  #: the Gymnasium id of :class:`husky_course.sim.env.HuskyNavEnv`
 
-if "HuskyNav-v0" not in registry:
-    register(id="HuskyNav-v0", entry_point="husky_course.sim.env:HuskyNavEnv")
+
+def register_env() -> None:
+    """Register :data:`ENV_ID` with Gymnasium (imported here, so only when called); idempotent."""
+    from gymnasium.envs.registration import register, registry
+
+    if ENV_ID not in registry:
+        register(id=ENV_ID, entry_point="husky_course.sim.env:HuskyNavEnv")
+
+
+if sys.modules.get("gymnasium") is not None:  # already loaded: registering costs nothing more
+    register_env()

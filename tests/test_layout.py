@@ -236,3 +236,23 @@ def test_a_missing_dependency_is_caught():
 def test_import_husky_course_does_not_need_ray():
     code = "import sys, husky_course.engines, husky_course.cli; assert 'ray' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+def test_import_husky_course_does_not_need_gymnasium():
+    """Gymnasium is needed by the environment only: the package and its config import without it."""
+    blocked = "import sys; sys.modules['gymnasium'] = None; import husky_course.config, husky_course.cli"
+    subprocess.run([sys.executable, "-c", blocked], check=True, cwd=ROOT)
+    code = "import sys, husky_course.config; assert 'gymnasium' not in sys.modules"
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+@pytest.mark.parametrize(
+    "imports",
+    [
+        "import gymnasium, husky_course.config",  # gymnasium first (sorted imports, chapter 1)
+        "import husky_course.config, gymnasium, husky_course.sim.env",  # the env's module registers it
+    ],
+)
+def test_gymnasium_make_finds_the_environment(imports):
+    code = f"{imports}; gymnasium.make('HuskyNav-v0').close()"
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)

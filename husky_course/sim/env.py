@@ -12,6 +12,9 @@
 world); ``reset(options={"world_seed": w})`` picks a world without touching the RNG, and
 ``options={"world": "moving"}`` (or ``HuskyNavEnv(world="moving")``) switches to the moving-obstacle
 course (``"static"`` back): step ``k`` is time ``k`` there (see :mod:`husky_course.sim.world`).
+
+Importing this module registers the environment as ``HuskyNav-v0`` (:func:`husky_course.register_env`),
+so ``gymnasium.make("HuskyNav-v0")`` works after it.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from .. import register_env
 from ..config import SimConfig, check_world_kind, sim_for_world, world_kind
 from .backends import make_simulator
 from .world import check_seed
@@ -123,3 +127,6 @@ class HuskyNavEnv(gym.Env):
 
     def close(self) -> None:
         self.sim.close()
+
+
+register_env()  # gymnasium.make("HuskyNav-v0") works once this module is imported
