@@ -81,34 +81,58 @@ class PieceReader:
 
         ``frame`` holds the piece's mean, the unit ray from the camera through it and the unit
         vector across (to the left of) the ray: a disc predicted as offsets ``(a, b)`` has its
-        centre at ``mean + a ray + b across``.
+        centre at ``mean + a ray + b across``. One piece of :meth:`features_all`.
+        """
+        feats, frames = self.features_all(points, columns, d, [np.arange(len(points))])
+        return feats[0], frames[0]
+
+    def features_all(
+        self, pts: np.ndarray, cols: np.ndarray, d: np.ndarray, pieces: list[np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``(features (n, F), frames (n, 3, 2))`` of an image's ``pieces`` (index arrays into ``pts``
+        and ``cols``, consecutive, in column order, as :meth:`pieces` gives them); see :meth:`features`.
+
+        The features: the piece's points resampled to ``PIECE_POINTS`` evenly spaced along it, in its
+        frame; its range over the far plane; its share of the columns; whether it touches either image
+        edge; its bearing over half the field of view; and at each end, whether the column beside it
+        sees nothing within range, and its depth step over the far plane (0 when nothing or the edge).
         """
         cam = self.camera
-        mean = points.mean(0)
+        count = np.array([len(i) for i in pieces])
+        sel = np.concatenate(pieces)
+        p, c = pts[sel], cols[sel]
+        first = np.r_[0, np.cumsum(count)[:-1]]  # where each piece starts in ``p``
+        mean = np.stack([pts[i].mean(0) for i in pieces])  # numpy's own (pairwise) sums, as one piece's
         ray = mean - (cam.mount_forward, 0.0)
-        rng = float(np.hypot(*ray))
-        ray = ray / max(rng, 1e-9)
-        across = np.array([-ray[1], ray[0]])
-        rel = points - mean
-        local = np.stack([rel @ ray, rel @ across], axis=1)
-        t = np.linspace(0, len(points) - 1, PIECE_POINTS)
-        idx = np.arange(len(points))
-        res = np.stack([np.interp(t, idx, local[:, 0]), np.interp(t, idx, local[:, 1])], axis=1)
-        glob = [
-            rng / cam.far,
-            len(points) / cam.size,
-            float(columns.min() == 0),
-            float(columns.max() == cam.size - 1),
-            float(np.arctan2(mean[1], mean[0] - cam.mount_forward)) / np.radians(cam.fov_deg / 2),
-        ]
-        for end, side in ((int(columns.min()), -1), (int(columns.max()), 1)):  # the column beside each end
+        rng = np.hypot(ray[:, 0], ray[:, 1])
+        ray = ray / np.maximum(rng, 1e-9)[:, None]
+        across = np.stack([-ray[:, 1], ray[:, 0]], axis=1)
+        owner = np.repeat(np.arange(len(pieces)), count)
+        rel = p - mean[owner]
+        local = np.stack([rel[:, 0] * ray[owner, 0] + rel[:, 1] * ray[owner, 1],
+                          rel[:, 0] * across[owner, 0] + rel[:, 1] * across[owner, 1]], axis=1)
+        # np.linspace(0, m - 1, PIECE_POINTS) per piece, and np.interp on the piece's points
+        t = np.arange(PIECE_POINTS)[None] * ((count - 1) / (PIECE_POINTS - 1))[:, None]
+        t[:, -1] = count - 1
+        j = np.minimum(np.floor(t).astype(int), (count - 1)[:, None])
+        nxt = np.minimum(j + 1, (count - 1)[:, None])
+        frac = (t - j)[..., None]
+        lo, hi = local[first[:, None] + j], local[first[:, None] + nxt]
+        res = np.where(frac > 0, lo + (hi - lo) * frac, lo)  # (n, PIECE_POINTS, 2)
+        c_lo, c_hi = c[first], c[first + count - 1]
+        glob = [rng / cam.far, count / cam.size, (c_lo == 0).astype(float),
+                (c_hi == cam.size - 1).astype(float),
+                np.arctan2(mean[:, 1], mean[:, 0] - cam.mount_forward) / np.radians(cam.fov_deg / 2)]
+        for end, side in ((c_lo, -1), (c_hi, 1)):  # the column beside each end
             nb = end + side
-            inside = 0 <= nb < cam.size
-            seen = inside and bool(np.isfinite(d[nb]))
-            step = float(np.clip((d[nb] - d[end]) / cam.far, -1, 1)) if seen else 0.0
-            glob += [float(inside and not seen), step]
+            inside = (nb >= 0) & (nb < cam.size)
+            beside = d[np.clip(nb, 0, cam.size - 1)]
+            seen = inside & np.isfinite(beside)
+            step = np.where(seen, np.clip((np.where(seen, beside, 0.0) - d[end]) / cam.far, -1, 1), 0.0)
+            glob += [(inside & ~seen).astype(float), step]
         assert len(glob) == PIECE_GLOBALS
-        return np.r_[res.reshape(-1), glob].astype(np.float32), np.stack([mean, ray, across])
+        feats = np.concatenate([res.reshape(len(pieces), -1), np.stack(glob, axis=1)], axis=1)
+        return feats.astype(np.float32), np.stack([mean, ray, across], axis=1)
 
 
 def majority_cylinder(hits: np.ndarray) -> int:
@@ -186,9 +210,8 @@ class DiscMap:
         cylinder (n,) bool, other (size,) bool)``, ``other`` marking the columns that stay scan points."""
         if not pieces:
             return np.empty((0, 3)), np.zeros(0, bool), np.zeros(len(d), bool)
-        feats, frames = zip(*(self.reader.features(pts[i], cols[i], d) for i in pieces), strict=True)
-        logit, offset, radius = self.forward(np.stack(feats))
-        frames_a = np.stack(frames)
+        feats, frames_a = self.reader.features_all(pts, cols, d, pieces)
+        logit, offset, radius = self.forward(feats)
         centres = frames_a[:, 0] + offset[:, :1] * frames_a[:, 1] + offset[:, 1:] * frames_a[:, 2]
         cyl = logit > 0
         other = np.zeros(len(d), bool)

@@ -78,6 +78,8 @@ class ClearanceGrid:
         ix = np.rint((x - self.x0) / self.res).astype(int)
         iy = np.rint((y - self.y0) / self.res).astype(int)
         nx, ny = self.grid.shape
+        if ix.size and iy.size and ix.min() >= 0 and ix.max() < nx and iy.min() >= 0 and iy.max() < ny:
+            return self.grid.ravel().take(ix * ny + iy)
         inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
         out = np.full(np.broadcast(ix, iy).shape, self.reach)
         ix, iy, inside = np.broadcast_arrays(ix, iy, inside)
@@ -146,11 +148,9 @@ class MappingPlanner(Planner):
     def _edge_check(self, horizon: int) -> EdgeCheck:
         """How the search judges an edge: its samples' clearance on the map's grid (no time)."""
         grid = self._grid(self.points, horizon)
-        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
 
         def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            x, y = X[:, ::every], Y[..., ::every]
-            clear = grid(np.broadcast_to(x, y.shape), y).min(-1) - self.radius
+            clear = grid(X, Y).min(-1) - self.radius
             return clear < self.margin, clear - self.margin
 
         return check
@@ -161,7 +161,8 @@ class MappingPlanner(Planner):
             raise RuntimeError("call reset(start) before act()")
         self.map.add(obs)
         horizon = max(1, min(self.horizon, self._remaining))
-        lattice = expand_with(self._edge_check(horizon), self._library, np.zeros(3), horizon)
+        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))
+        lattice = expand_with(self._edge_check(horizon), self._library, np.zeros(3), horizon, every=every)
         ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
         return int(ranking.choice[0][0]), ranking.keys[0][0]
 

@@ -58,15 +58,13 @@ class TrackingPlanner(MappingPlanner):
     def _edge_check(self, horizon: int) -> EdgeCheck:
         """Standing points on the mapping planner's clearance grid; each walking point exactly, where
         it is at every sample's time."""
-        every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))  # type: ignore[union-attr]
         walking = self.velocity != 0
         reach = self.radius + self.margin + self.cap
         grid = self._grid(self.points[~walking], horizon)
         movers, speeds = self.points[walking], self.velocity[walking]
 
-        def check(X: np.ndarray, Y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            x, y, t = X[:, ::every], Y[..., ::every], T[::every]
-            gap = grid(np.broadcast_to(x, y.shape), y)
+        def check(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            gap = grid(x, y)
             near = np.flatnonzero((movers[:, 0] > x.min() - reach) & (movers[:, 0] < x.max() + reach))
             for (px, py, r), v in zip(movers[near], speeds[near], strict=True):  # where it is at each sample
                 np.minimum(gap, np.hypot(x - px, y - (py + v * t)) - r, out=gap)

@@ -133,12 +133,14 @@ def expand(
 
 
 def expand_with(
-    check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, t0: float = 0.0
+    check: EdgeCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, t0: float = 0.0,
+    every: int = 1,
 ) -> Lattice:
     """Expand the lattice from ``pose`` at time ``t0`` for ``horizon`` steps, each edge judged by ``check``.
 
     The one search routine: the oracle and the survival labels judge edges with the simulator's
-    geometry (:func:`disc_check`), the mapping planner with its map.
+    geometry (:func:`disc_check`), the mapping planner with its map. ``check`` sees every
+    ``every``-th sample of each edge (the mapping planners judge 21 of the 101).
     """
     pose = np.asarray(pose, float)
     if abs(pose[2]) >= 1e-9:
@@ -150,9 +152,9 @@ def expand_with(
     for k in range(horizon):
         J = states[k]
         y0 = pose[1] + k * offsets[0] + J * h
-        X = pose[0] + k * adv + local[:, :, 0]  # (n, S)
-        Y = y0[:, None, None] + local[None, :, :, 1]  # (nJ, n, S)
-        hit, c = check(X, Y, sample_times(t0 + k, local.shape[1]))
+        X = pose[0] + k * adv + local[:, ::every, 0]  # (n, S)
+        Y = y0[:, None, None] + local[None, :, ::every, 1]  # (nJ, n, S)
+        hit, c = check(X, Y, sample_times(t0 + k, local.shape[1])[::every])
         feasible.append(~hit)
         clear.append(c)
         targets = J[:, None] + np.arange(n)[None]
