@@ -9,8 +9,9 @@ from dataclasses import replace
 import pytest
 
 from husky_course import cli
-from husky_course.config import TrainConfig, TrainingPlan, get_profile
+from husky_course.config import TrainConfig, TrainingPlan, get_profile, with_world
 from husky_course.data import store
+from husky_course.data.io import DatasetError
 from husky_course.training import builders, trainer
 from husky_course.training.trainer import CheckpointError
 
@@ -93,3 +94,21 @@ def test_a_build_is_announced_in_one_line_first(tmp_path, monkeypatch, capsys):
     assert "`python -m husky_course collect --profile quick`" in out[0]
     store.get_dataset(profile, workers=1, progress=False)  # now it loads: nothing announced
     assert capsys.readouterr() == ("", "")
+
+
+def test_a_missing_moving_dataset_names_the_moving_command(tmp_path, monkeypatch):
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(tmp_path / "artifacts"))
+    moving = with_world(QUICK, "moving")
+    command = r"`python -m husky_course collect --profile quick --world moving`"
+    with pytest.raises(DatasetError, match=command):
+        store.load_profile_dataset(moving)
+    with pytest.raises(DatasetError, match=r"collect --profile quick`"):  # the static course: no flag
+        store.load_profile_dataset(QUICK)
+    args = cli.build_parser().parse_args(["collect", "--profile", "quick", "--world", "moving"])
+    assert args.world == "moving"  # the command the message names is one the CLI accepts
+
+
+def test_the_dataset_key_holds_the_collection_code(monkeypatch):
+    before = store.dataset_dir(QUICK)
+    monkeypatch.setattr(store, "code_fingerprint", lambda *modules: "other code")
+    assert store.dataset_dir(QUICK) != before

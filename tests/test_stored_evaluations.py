@@ -7,6 +7,7 @@ import pytest
 import torch
 
 from husky_course.config import get_profile
+from husky_course.data import code
 from husky_course.data.store import ARTIFACTS_ENV
 from husky_course.evaluation import stored
 from husky_course.evaluation.episodes import evaluate
@@ -75,3 +76,22 @@ def test_an_unknown_attribute_means_no_store(monkeypatch):
     result = stored.evaluate_stored(planner, 2, 1, PROFILE, progress=False)
     assert result.worlds == 2
     assert not list((stored.artifacts_root() / "quick").rglob("*.npz"))
+
+
+def test_a_stored_run_records_its_code_and_goes_stale_when_that_code_changes(monkeypatch):
+    planner = make_planner("heuristic")
+    path = stored.evaluation_path(planner, 2, 1, PROFILE, PROFILE.sim)
+    stored.evaluate_stored(make_planner("heuristic"), 2, 1, PROFILE, progress=False)
+    assert path.is_file()
+    fingerprint, modules = stored.evaluation_code(planner)
+    assert type(planner).__module__ in modules and "husky_course.evaluation.episodes" in modules
+    assert "husky_course.training.builders" not in code.closure(*modules)  # training edits keep it
+    assert not stored.stale_evaluation(path)
+    monkeypatch.setattr(stored, "code_fingerprint", lambda *modules: "other code")
+    assert stored.stale_evaluation(path)
+    assert stored.evaluation_path(planner, 2, 1, PROFILE, PROFILE.sim) != path  # and is run again
+
+
+def test_a_run_without_recorded_code_is_stale(tmp_path):
+    (tmp_path / "old.npz").write_bytes(b"")
+    assert stored.stale_evaluation(tmp_path / "old.npz")
