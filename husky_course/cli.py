@@ -13,7 +13,8 @@ Examples
 ``python -m husky_course certify --profile full --worlds 2000 --workers 2`` (chapter 9's certificate,
 at another scale: its own artifact; ``train certificate`` builds the profile's)
 ``python -m husky_course clean --profile full --dry-run`` (the artifacts no current code or config makes)
-``python -m husky_course fingerprint`` (the library's code, docstrings and comments left out: ``make book``)
+``python -m husky_course fingerprint`` (the library's code, docstrings and comments left out: ``make book``);
+``python -m husky_course fingerprint husky_course.data.labels`` (a module's, with the modules it imports)
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from dataclasses import replace
 
 from .checks import check_int
 from .config import PROFILES, WORLD_KINDS, ConfigError, get_profile, with_world
-from .data.code import library_fingerprint
+from .data.code import code_fingerprint, library_fingerprint
 from .data.collect import collect
 from .data.dataset import load_dataset, stats
 from .data.io import DatasetError
@@ -130,7 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
     k = sub.add_parser("clean", help="delete the artifacts no current code or config would make")
     k.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
     k.add_argument("--dry-run", action="store_true", help="only list them")
-    sub.add_parser("fingerprint", help="print the fingerprint of the library's code (docstrings left out)")
+    f = sub.add_parser("fingerprint", help="print the fingerprint of the library's code (no docstrings)")
+    f.add_argument("modules", nargs="*", help="only these modules and what they import (as artifact keys do)")
     return parser
 
 
@@ -333,7 +335,7 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "clean":
             _clean(args)
         elif args.command == "fingerprint":
-            print(library_fingerprint())
+            print(code_fingerprint(*args.modules) if args.modules else library_fingerprint())
         elif args.command == "certify":
             print(json.dumps(_certify(args), indent=1))
         elif args.command == "evaluate":
