@@ -244,7 +244,7 @@ class DiscMap:
                 seen_again |= (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
             kept = ~seen_again
         self.discs = np.concatenate([new, self.discs[kept]])
-        self.walls.add(obs, use=other)
+        self.walls.add(obs, use=other, depth=d)
         return kept
 
     def move(self, dx: float, dy: float) -> np.ndarray:

@@ -82,16 +82,19 @@ class EgoMap:
         """Forget everything (a new episode)."""
         self.points = np.empty((0, 3))
 
-    def add(self, obs: np.ndarray, use: np.ndarray | None = None) -> np.ndarray:
+    def add(
+        self, obs: np.ndarray, use: np.ndarray | None = None, depth: np.ndarray | None = None
+    ) -> np.ndarray:
         """Merge the scan of ``obs`` into the map (see the class docstring).
 
         ``use`` (a boolean mask over the image's columns) limits which columns' points join the
         map (default: every column that sees something); every column still clears what it sees
-        again or sees through. Returns which of the points held before were kept (a boolean mask
-        over them): the new scan's points come first in :attr:`points`, then the kept ones, in order.
+        again or sees through. ``depth``: the image's per-column depth when the caller has it
+        (:meth:`DepthScan.columns`). Returns which of the points held before were kept (a boolean
+        mask over them): the new scan's points come first in :attr:`points`, then the kept ones.
         """
         cam = self.scan.camera
-        d = self.scan.columns(obs)
+        d = self.scan.columns(obs) if depth is None else depth
         kept = np.ones(len(self.points), bool)
         if len(self.points):
             dx = self.points[:, 0] - cam.mount_forward

@@ -11,6 +11,7 @@ recorded samples ``s = 0 .. S-1`` of the primitive it then plays back are at tim
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,8 +106,15 @@ def obstacle_outline() -> np.ndarray:
 
 def sample_times(t: np.ndarray | float, samples: int) -> np.ndarray:
     """Times ``shape(t) + (samples,)`` of a primitive's recorded samples when it starts at ``t``."""
+    return np.asarray(t, float)[..., None] + _fractions(samples)
+
+
+@functools.cache
+def _fractions(samples: int) -> np.ndarray:
+    """``0..1`` in ``samples`` steps (read-only: one array shared by every call)."""
     frac = np.linspace(0.0, 1.0, samples) if samples > 1 else np.zeros(1)
-    return np.asarray(t, float)[..., None] + frac
+    frac.flags.writeable = False
+    return frac
 
 
 def pose_times(t: np.ndarray | float, n: int) -> np.ndarray:
