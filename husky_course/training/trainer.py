@@ -7,7 +7,7 @@ runs), a tqdm bar, and a checkpoint after every epoch.
 
 Checkpoints are plain dicts of tensors and JSON-able values, written atomically and read with
 ``torch.load(..., weights_only=True)``. Each records the model's :class:`~husky_course.models.base.ModelSpec`
-and a *fingerprint* (the model spec, training config and dataset hash that produced it); loading
+and a *fingerprint* (the model spec, training config, dataset hash and code that produced it); loading
 one into a different architecture, or resuming a run whose fingerprint differs, raises
 :class:`CheckpointError` instead of silently mixing results. A run killed mid-epoch restarts from
 its last finished epoch and ends with the same weights as an uninterrupted run, because the
