@@ -21,7 +21,7 @@ import torch
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
-from husky_course.course import diagnosis
+from husky_course.course import diagnosis, exercises  # noqa: F401  (exercises: below)
 from husky_course.data.splits import reward_set
 from husky_course.data.store import get_dataset
 from husky_course.evaluation.metrics import classification
@@ -293,7 +293,7 @@ display(Markdown(" ".join(summary)))
 # ## Exercises
 #
 # 1. Write the off-by-one slip yourself from `ds.prims` (hint: where is −1?) and check your labels
-#    with `husky_course.course.exercises.check_shifted_labels(ds, your_labels)`.
+#    with `exercises.check_shifted_labels(ds, your_labels)`.
 # 2. Adam divides each step by a running estimate of the gradient's scale. What does that predict
 #    for the "summed loss" variant against the faithful one? Compare the two rows of the table
 #    above. Would plain SGD agree?

@@ -30,6 +30,7 @@ import torch
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.data import splits
 from husky_course.data.store import get_dataset
 from husky_course.evaluation.horizons import horizon_errors
@@ -166,4 +167,4 @@ display(Markdown(text))
 #    neighbouring primitives neighbours in the embedding?
 # 3. Why does the number of image pairs fall with the horizon? Compute it from the lengths of the
 #    validation videos alone (`ds.lengths[husky_course.data.splits.val_videos(ds)]`) and check your
-#    numbers with `husky_course.course.exercises.check_pairs_per_horizon(lengths, your_counts)`.
+#    numbers with `exercises.check_pairs_per_horizon(lengths, your_counts)`.

@@ -37,6 +37,7 @@ import numpy as np
 from IPython.display import Markdown, display
 
 from husky_course.config import get_profile
+from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.evaluation.analysis import collision_cause
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.evaluation.statistics import clopper_pearson
@@ -260,7 +261,7 @@ widgets.primitive_explorer(builders.get_joint(profile).model, default_seed=0, de
 #    same with `--planner lookahead --look-ahead 0`. Which one would you deploy, and what does the
 #    upper bound on the collision rate add to the success rate? With 0 collisions in *n* worlds that
 #    bound is 1 − 0.05^(1/n): how many held-out worlds certify a collision rate below 1%? Check with
-#    `husky_course.course.exercises.check_worlds_for_certificate(n)`.
+#    `exercises.check_worlds_for_certificate(n)`.
 # 2. Give the heuristic memory (`make_planner("heuristic", memory=True)`): it remembers where it saw
 #    obstacles and shifts them as it moves. How much of the gap to the oracle does memory close?
 # 3. Algorithm 1 adds the halved scores of a *single* continuation (the best-so-far) to every

@@ -63,7 +63,7 @@ print(f"profile {profile.name}: {N} held-out worlds of evaluation set {REPORT}")
 # could do better than either without seeing more.
 
 # %%
-ceiling = {
+references = {
     name: evaluate_stored(p, N, REPORT, profile, progress=False, workers=W) for name, p in [
         ("seen now (perfect perception)", SeenObstaclesPlanner(memory=False)),
         ("seen so far (perfect perception)", SeenObstaclesPlanner(memory=True)),
@@ -72,8 +72,8 @@ ceiling = {
 display(Markdown(markdown_table([
     {"planner": k, "success": r.success_rate,
      "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]"}
-    for k, r in ceiling.items()])))
-now, ever, oracle = (r.success_rate for r in ceiling.values())
+    for k, r in references.items()])))
+now, ever, oracle = (r.success_rate for r in references.values())
 display(Markdown(
     f"With perfect perception of the current image alone, {now:.1%} of the worlds are crossed; remembering "
     f"every obstacle seen so far raises it to {ever:.1%}, {ever / oracle:.0%} of the oracle's {oracle:.1%}. "
@@ -227,8 +227,8 @@ for name in names:
         p = make_planner(name, profile=profile, look_ahead=LOOK_AHEAD, train=True)
     elif name in ("memory", "discs"):
         p = make_planner(name, profile=profile)  # afresh (the memory student above has run an episode)
-    elif name == "oracle":  # the same planner on the same worlds as in the ceiling table: reuse its run
-        results[name] = ceiling["oracle (every obstacle)"]
+    elif name == "oracle":  # the same planner on the same worlds as in the references' table: reuse its run
+        results[name] = references["oracle (every obstacle)"]
         continue
     else:
         p = make_planner(name)

@@ -78,7 +78,7 @@ class CameraConfig:
     """
 
     size: int = 50
-    fov_deg: float = 130.0  #: the lab's value; chapter 1 shows why 90 is too narrow
+    fov_deg: float = 130.0  #: our choice (the paper gives none); chapter 1 shows why 90 is too narrow
     near: float = 0.02
     far: float = 5.0
     mount_forward: float = 0.45  #: m ahead of the base centre, on the collision cylinder, behind the bumper

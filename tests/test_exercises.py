@@ -26,8 +26,6 @@ QUICK = get_profile("quick")  # resolved once, passed down
 MOVING = with_world(QUICK, "moving")
 CHAPTERS = sorted((Path(__file__).resolve().parents[1] / "chapters").glob("[0-9][0-9]_*.py"))
 CALL = re.compile(r"`((?:[\w.]+\.)?exercises\.(check_\w+)\([^`]*\))`")
-#: chapters owned elsewhere whose exercise calls name a module the chapter does not import (issue 26)
-MISSING_IMPORT = {"04", "06", "07"}
 
 
 def exercise_calls(path: Path) -> list[tuple[str, str]]:
@@ -228,12 +226,7 @@ def test_wrong_answer_is_rejected(chapter, call, name, ds):
     assert len(str(info.value)) > 20  # a hint, not a bare failure
 
 
-@pytest.mark.parametrize(
-    "path",
-    [pytest.param(p, marks=pytest.mark.xfail(reason="the chapter does not import what its exercises call"))
-     if p.name[:2] in MISSING_IMPORT else p for p in CHAPTERS],
-    ids=[p.name[:2] for p in CHAPTERS],
-)
+@pytest.mark.parametrize("path", CHAPTERS, ids=[p.name[:2] for p in CHAPTERS])
 def test_chapter_imports_what_its_exercises_call(path):
     namespace = chapter_imports(path)
     for call, _ in exercise_calls(path):

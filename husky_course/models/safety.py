@@ -102,7 +102,7 @@ class SurvivalNet(nn.Module):
     the best continuation that starts with it stays collision-free (as a fraction, via sigmoid).
 
     Same encoder as every other model; the labels come from the simulator
-    (:func:`husky_course.data.labels.survival_steps`), not from the random policy's single outcome.
+    (:func:`husky_course.data.labels.survival_steps_parallel`), not from the random policy's single outcome.
     """
 
     HIDDEN = (64, 64)

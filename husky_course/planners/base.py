@@ -8,10 +8,11 @@ collision). ``act`` leaves the per-primitive scores it used in ``last_scores`` (
 
 **Privileged information.** A planner declares ``privileged = True`` to be given the simulator
 (with the world loaded) and the true pose: only the oracle (:mod:`~husky_course.planners.oracle`)
-does. Every other planner receives, and can only receive, what the robot has: its depth images,
-the primitives it applied (through :meth:`Planner.observe`) and its own primitive library (the
-motion it knows it makes); ``start.sim``, ``start.pose`` and ``act``'s ``pose`` are ``None``.
-``tests/test_privileged.py`` checks this. The non-learned planners live in
+and the references of :mod:`~husky_course.planners.reference` (analysis only, never in a table of
+camera-based planners) do. Every other planner receives, and can only receive, what the robot
+has: its depth images, the primitives it applied (through :meth:`Planner.observe`) and its own
+primitive library (the motion it knows it makes); ``start.sim``, ``start.pose`` and ``act``'s
+``pose`` are ``None``. ``tests/test_privileged.py`` checks this. The non-learned planners live in
 :mod:`~husky_course.planners.classic`,
 the learned ones in :mod:`~husky_course.planners.learned`, and
 :mod:`~husky_course.planners.registry` builds any of them by name.

@@ -1,7 +1,8 @@
 """The oracle: exact planning on the true simulator (no learning), the ceiling of every planner.
 
-It is the one *privileged* planner: :meth:`OraclePlanner.reset` keeps the simulator, and
-:meth:`OraclePlanner.act` reads the true pose. Everything else sees depth images.
+It is *privileged*: :meth:`OraclePlanner.reset` keeps the simulator, and :meth:`OraclePlanner.act`
+reads the true pose (the analysis references of :mod:`~husky_course.planners.reference` are too).
+Every planner of the course's tables but this one sees depth images.
 """
 
 from __future__ import annotations
