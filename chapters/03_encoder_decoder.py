@@ -127,7 +127,7 @@ display(Markdown(" ".join(text)))
 # training video used.
 
 # %%
-fresh = fresh_pairs(20, seed=777, config=profile.sim)
+fresh = fresh_pairs(20, seed=profile.course.fresh_pairs_seed, config=profile.sim)
 pred_fresh = inference.predict_next(ed.model, fresh["image"], fresh["prim"])
 fig = plotting.prediction_grid(fresh["image"], fresh["next"], pred_fresh)
 plt.show()

@@ -104,11 +104,12 @@ first = sim.load(int(eval_world_seeds(1, REPORT)[0]))
 ego = EgoMap(DepthScan(profile.sim), forget_behind=profile.memory.map_behind)
 ego.add(sim.depth(first.start[None])[0])
 print("points the first image adds to the map:", len(ego.points))
-end = sim.library.local_paths[20, -1]
+EXAMPLE = profile.course.example_primitive
+end = sim.library.local_paths[EXAMPLE, -1]
 before = ego.points[:, :2].copy()
 ego.move(float(end[0]), float(end[1]))
 kept = before[before[:, 0] - end[0] > -profile.memory.map_behind]
-print("after primitive 20 every point moved by", np.round(-end[:2], 3).tolist(), "exactly:",
+print(f"after primitive {EXAMPLE} every point moved by", np.round(-end[:2], 3).tolist(), "exactly:",
       bool(np.allclose(ego.points[:, :2], kept - end[:2])))
 
 # %%
@@ -218,7 +219,7 @@ plt.show()
 # (`husky_course/evaluation/stored.py`).
 
 # %%
-LOOK_AHEAD = 2  # as in chapter 7
+LOOK_AHEAD = profile.eval.look_ahead  # as in chapter 7
 print(f"LOOK_AHEAD = {LOOK_AHEAD}")
 names = ["random", "lookahead", "rnn", "distilled", "heuristic", "mapping", "memory", "discs", "oracle"]
 results = {}
@@ -256,7 +257,8 @@ mem, mapping, distilled, orc = (results[n] for n in ("memory", "mapping", "disti
 ratio = mem.success_rate / orc.success_rate
 text = (
     f"The memory student crosses {mem.success_rate:.1%} of the worlds, {ratio:.0%} of the oracle "
-    f"({'meeting' if ratio >= 0.95 else 'short of'} the goal of 95%), against {distilled.success_rate:.1%} "
+    f"({'meeting' if ratio >= profile.eval.static_goal else 'short of'} the goal of "
+    f"{profile.eval.static_goal:.0%}), against {distilled.success_rate:.1%} "
     f"for the distilled planner without memory and {mapping.success_rate:.1%} for the classical mapping "
     f"planner, at {mem.ms_per_decision:.2f} ms per decision against the mapping planner's "
     f"{mapping.ms_per_decision:.2f}. ")
@@ -288,7 +290,7 @@ won = sum(a.success and not b.success for a, b in zip(disc.episodes, mapping.epi
 lost = sum(b.success and not a.success for a, b in zip(disc.episodes, mapping.episodes, strict=True))
 k, m = min(won, lost), won + lost
 p_value = min(1.0, 2 * sum(comb(m, i) for i in range(k + 1)) / 2**m) if m else 1.0
-share, goal = disc.success_rate / orc.success_rate, 0.95
+share, goal = disc.success_rate / orc.success_rate, profile.eval.static_goal
 verdict = (f"The disc planner crosses {disc.success_rate:.1%} of the reporting worlds "
            f"[{disc.success_ci95[0]:.1%}, {disc.success_ci95[1]:.1%}], {share:.1%} of the oracle's success "
            f"({'meeting' if share >= goal else 'short of'} the goal of {goal:.0%}); the mapping planner "

@@ -39,9 +39,9 @@ def announce_build(what: str, profile_name: str, command: str) -> None:
     notebook the line goes to stdout (stderr would be drawn as an error); elsewhere to stderr, so
     that a command's stdout stays what it prints (the CLI's JSON).
     """
-    from .config import BUILD_MINUTES  # the floor: config has no imports from here
+    from .config import get_profile  # the floor: config has no imports from here
 
-    minutes = BUILD_MINUTES.get(profile_name, {}).get(what)
+    minutes = get_profile(profile_name).minutes_to_build(what)
     if minutes is None:
         how_long = "time not measured"
     else:

@@ -345,7 +345,7 @@ def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
     encoder = ed.model.encoder  # type: ignore[union-attr]
     latents = encode(encoder, images)
     dist = nearest_obstacle_distance(ds, config=profile.sim)
-    torch.manual_seed(1)
+    torch.manual_seed(profile.course.random_encoder_seed)
     random_latents = encode(Encoder(profile.dims).eval(), images)
     pixels, latent = profile.dims.image_size**2, profile.dims.latent
     probe_inputs = {

@@ -7,11 +7,12 @@ higher stage without importing it). Each module enters as its syntax tree with e
 (and every other bare string statement) removed, dumped without line numbers: a comment, a
 docstring or a reformatting changes no fingerprint; a changed statement, name or constant does.
 
-Two modules never enter: ``husky_course.config``, because every key already holds the config
-*values* its artifact was built under (an edit of config.py either changes those values, and so
-the keys, or changes nothing an artifact depends on), and ``husky_course.progress``, which only
-draws progress bars and prints what is being built. :func:`library_fingerprint` (the book's
-execution cache, ``make book``) covers every module, these two included.
+Two modules never enter: ``husky_course.config`` (the package, with its modules), because every
+key already holds the config *values* its artifact was built under (an edit there either changes
+those values, and so the keys, or changes nothing an artifact depends on), and
+``husky_course.progress``, which only draws progress bars and prints what is being built.
+:func:`library_fingerprint` (the book's execution cache, ``make book``) covers every module, these
+two included.
 
 Fingerprints are cached per process and per ``root``: tests point ``root`` at an edited copy of
 the package.
@@ -99,13 +100,16 @@ def imports(name: str, root: Path | None = None) -> set[str]:
 
 def closure(*modules: str, root: Path | None = None, neutral: frozenset[str] = NEUTRAL) -> list[str]:
     """``modules`` and every package module they import at any depth, sorted, less ``neutral``."""
-    todo, seen = [m for m in modules if m not in neutral], set()
+    def is_neutral(m: str) -> bool:  # a neutral package's modules are neutral too
+        return any(m == n or m.startswith(n + ".") for n in neutral)
+
+    todo, seen = [m for m in modules if not is_neutral(m)], set()
     while todo:
         name = todo.pop()
         if name in seen:
             continue
         seen.add(name)
-        todo += [m for m in imports(name, root) if m not in neutral and m not in seen]
+        todo += [m for m in imports(name, root) if not is_neutral(m) and m not in seen]
     return sorted(seen)
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import EvalPlan, SimConfig
 from ..engines import map_tasks
 from ..progress import tqdm
 from ..sim.fast import FastSimulator
@@ -68,7 +68,7 @@ def survival_at(
     poses: np.ndarray,
     horizon: int,
     config: SimConfig | None = None,
-    workers: int = 2,
+    workers: int = EvalPlan.workers,
     progress: bool = True,
     engine: str | None = None,
     times: np.ndarray | None = None,
@@ -111,7 +111,7 @@ def survival_steps_parallel(
     horizon: int,
     idx: np.ndarray | None = None,
     config: SimConfig | None = None,
-    workers: int = 2,
+    workers: int = EvalPlan.workers,
     progress: bool = True,
 ) -> np.ndarray:
     """Steps (0..``horizon``) the best continuation starting with each primitive survives from each

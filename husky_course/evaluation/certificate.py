@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..config import MemoryConfig, Profile, SimConfig, to_dict, world_flag
+from ..config import EvalPlan, MemoryConfig, Profile, SimConfig, to_dict, world_flag
 from ..data.code import code_fingerprint
 from ..data.io import DatasetError, atomic_save_npz, atomic_write_bytes, load_npz
 from ..data.store import model_dir
@@ -158,7 +158,7 @@ def sampled_costs(
     memory: MemoryConfig,
     seed: int,
     engine: str | None = None,
-    workers: int = 2,
+    workers: int = EvalPlan.workers,
     progress: bool = True,
     desc: str = "sampled policies",
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -236,7 +236,7 @@ def _result(
 
 
 def get_certificate(
-    profile: Profile, progress: bool = True, engine: str | None = None, workers: int = 2
+    profile: Profile, progress: bool = True, engine: str | None = None, workers: int = EvalPlan.workers
 ) -> CertificateResult:
     """The certificate, built where missing (needs the trained memory student; see the module docstring)."""
     g = profile.guarantee

@@ -81,7 +81,8 @@ class Episode:
 
 
 def run_episode(
-    planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = 10, record: bool = False
+    planner: Planner, sim: Simulator, world_seed: int, max_primitives: int = SimConfig.max_primitives,
+    record: bool = False,
 ) -> Episode:
     """Run ``planner`` in world ``world_seed`` until a collision or ``max_primitives`` primitives.
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import ArrivalsConfig, SimConfig
 
 
 class Arrivals:
@@ -39,7 +39,8 @@ class Arrivals:
         Walking speeds tried per direction, evenly spaced over ``speed_range``.
     """
 
-    def __init__(self, config: SimConfig, tolerance: float = 0.15, hypotheses: int = 5) -> None:
+    def __init__(self, config: SimConfig, tolerance: float = ArrivalsConfig.tolerance,
+                 hypotheses: int = ArrivalsConfig.hypotheses) -> None:
         self.camera = config.camera
         self.half = float(np.tan(np.radians(self.camera.fov_deg) / 2))
         lo, hi = getattr(config.world, "speed_range", (0.0, 0.0))

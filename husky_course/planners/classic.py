@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import HeuristicConfig, SimConfig
 from ..sim.primitives import primitive_offsets, s_curve
 from .base import EpisodeStart, Planner, PlannerError, check_observation
 from .perception import DepthScan
@@ -64,11 +64,11 @@ class HeuristicPlanner(Planner):
     def __init__(
         self,
         config: SimConfig | None = None,
-        cap: float = 0.35,
-        lateral_weight: float = 0.1,
-        depth: int = 2,
+        cap: float = HeuristicConfig.cap,
+        lateral_weight: float = HeuristicConfig.lateral_weight,
+        depth: int = HeuristicConfig.depth,
         memory: bool = False,
-        path_samples: int = 11,
+        path_samples: int = HeuristicConfig.path_samples,
     ) -> None:
         super().__init__()
         if depth not in (1, 2):

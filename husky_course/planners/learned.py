@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from ..config import Profile, world_kind
+from ..config import EvalPlan, Profile, check_profile, world_kind
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
@@ -121,7 +121,9 @@ class LookaheadPlanner(Planner):
 
     name = "lookahead"
 
-    def __init__(self, model: JointModel, look_ahead: int = 2, reward: str = "applied") -> None:
+    def __init__(
+        self, model: JointModel, look_ahead: int = EvalPlan.look_ahead, reward: str = "applied"
+    ) -> None:
         super().__init__()
         if reward not in REWARDS:
             raise PlannerError(f"unknown reward reading {reward!r}: choose one of {', '.join(REWARDS)}")
@@ -140,7 +142,8 @@ class RNNPlanner(Planner):
 
     name = "rnn"
 
-    def __init__(self, model: RNNLookahead, look_ahead: int = 2, samples: int = 1000, seed: int = 0) -> None:
+    def __init__(self, model: RNNLookahead, look_ahead: int = EvalPlan.look_ahead, samples: int = 1000,
+                 seed: int = 0) -> None:
         super().__init__()
         self.model = model.eval()
         self.depth = check_look_ahead(look_ahead) + 1  # look_ahead 0 = judge the next step only
@@ -206,16 +209,18 @@ MODEL_OF = {
 
 
 def make_learned_planner(
-    name: str, profile: Profile, look_ahead: int = 2, train: bool = False, **kwargs: Any
+    name: str, profile: Profile, look_ahead: int | None = None, train: bool = False, **kwargs: Any
 ) -> Planner:
     """Build a learned planner from the profile's checkpoints.
 
     With ``train=False`` (the CLI's default) nothing is built: a missing checkpoint is an error
     naming the command that trains it. ``train=True`` builds what is missing (with progress bars),
     except the memory student, which DAgger trains (:func:`husky_course.imitation.dagger.get_memory`),
-    and the disc network (:func:`husky_course.imitation.discs.get_discs`).
+    and the disc network (:func:`husky_course.imitation.discs.get_discs`). ``look_ahead`` defaults to
+    the profile's (``profile.eval.look_ahead``).
     """
-    check_look_ahead(look_ahead)
+    profile = check_profile(profile)
+    look_ahead = check_look_ahead(profile.eval.look_ahead if look_ahead is None else look_ahead)
     if name not in MODEL_OF:
         raise PlannerError(f"{name!r} is not a learned planner: choose one of {', '.join(MODEL_OF)}")
     try:

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import MappingConfig, OracleConfig, SimConfig
 from ..sim.lattice import EdgeCheck, expand_with, rank_plans
 from .base import EpisodeStart, Planner
 from .perception import DepthScan, EgoMap
@@ -95,12 +95,12 @@ class MappingPlanner(Planner):
     def __init__(
         self,
         config: SimConfig | None = None,
-        horizon: int = 5,
-        cap: float = 0.3,
-        quantum: float = 0.02,
-        margin: float = 0.02,
-        resolution: float = 0.025,
-        path_samples: int = 21,
+        horizon: int = MappingConfig.horizon,
+        cap: float = OracleConfig.cap,
+        quantum: float = OracleConfig.quantum,
+        margin: float = MappingConfig.margin,
+        resolution: float = MappingConfig.resolution,
+        path_samples: int = MappingConfig.path_samples,
     ) -> None:
         super().__init__()
         cfg = config or SimConfig()

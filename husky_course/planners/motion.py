@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import SimConfig, TrackingConfig
 from .arrivals import Arrivals
 from .perception import DepthScan, EgoMap
 
@@ -116,8 +116,9 @@ class Tracks:
 
     def __init__(
         self, max_step: float, camera_x: float, radius: float, column: float, half_tangent: float,
-        looks: int = 4, keep: int = 2, gate: float = 0.2, x_gate: float = 0.3,
-        prior: tuple[float, float, float] | None = None, error_scale: float = 0.5,
+        looks: int = TrackingConfig.looks, keep: int = TrackingConfig.keep, gate: float = TrackingConfig.gate,
+        x_gate: float = TrackingConfig.x_gate, prior: tuple[float, float, float] | None = None,
+        error_scale: float = TrackingConfig.error_scale,
     ) -> None:
         self.max_step, self.camera_x, self.radius = max_step, camera_x, radius
         self.prior, self.error_scale = prior, error_scale

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import MappingConfig, SimConfig
 from ..sim.lattice import EdgeCheck
 from .mapping import MappingPlanner
 from .motion import WalkingMap
@@ -45,8 +45,8 @@ class TrackingPlanner(MappingPlanner):
 
     name = "tracking"  #: the mapping planner, with motion
 
-    def __init__(self, config: SimConfig | None = None, horizon: int = 5, arrivals: bool = True,
-                 **kwargs: float) -> None:
+    def __init__(self, config: SimConfig | None = None, horizon: int = MappingConfig.horizon,
+                 arrivals: bool = True, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
 

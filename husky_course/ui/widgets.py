@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from ..config import SimConfig
+from ..config import EvalPlan, SimConfig
 from ..evaluation.episodes import Episode, eval_world_seeds, run_episode
 from ..progress import static_mode
 from ..sim.backends import make_simulator
@@ -193,7 +193,7 @@ def planner_stepper(
     planners: tuple[str, ...],
     default_seed: int,
     default_planner: str,
-    default_look_ahead: int = 2,
+    default_look_ahead: int = EvalPlan.look_ahead,
     default_step: int = 0,
     seeds: tuple[int, int] = (0, 99),
     sim: Simulator | None = None,
