@@ -62,7 +62,7 @@ book-cache:
 	mkdir -p _build && echo "$(PROFILE)" > _build/.profile && echo "$$lib" > _build/.library
 
 lint: install
-	$(VENV)/bin/ruff check husky_course tests benchmarks chapters
+	$(VENV)/bin/ruff check husky_course tests benchmarks chapters conftest.py
 
 lab: install  ## the chapters in JupyterLab, in the profile the book was last built with (else quick)
 	HUSKY_PROFILE=$$(cat _build/.profile 2>/dev/null || echo quick) $(VENV)/bin/jupyter lab notebooks/ \
@@ -71,18 +71,16 @@ lab: install  ## the chapters in JupyterLab, in the profile the book was last bu
 sync: install  ## after editing a chapter source (or its notebook outside Jupyter): update the other side
 	$(VENV)/bin/jupytext --sync chapters/*.py
 
-# Every chapter runs twice here, on purpose: nbval runs it as a student's kernel does (live widgets,
-# the NBVAL_CHECK_OUTPUT cells compared), and tests/test_browser.py builds the book from it as
-# `make book` does (HUSKY_STATIC_WIDGETS=1: players precomputed, then checked in Chromium). Two code
-# paths, so neither execution can stand in for the other; measured on 2 busy cores, chapter 1 took
-# 34 s live / 39 s static and chapter 7 86 s / 104 s: not cheap. The book's executions are cached in
-# _build/browser-test and kept while husky_course/, the requirements and _config.yml are unchanged
-# (then only edited chapters run again); a fresh clone (CI) or a library change pays in full.
+# Every chapter runs once here. nbval runs the notebooks first, in the book's mode (--keep-executed:
+# HUSKY_STATIC_WIDGETS=1 for its kernels only) and keeps each chapter that passed, outputs included,
+# in _build/executed/; tests/test_browser.py builds the book from those without executing again. A
+# student's live widgets have their own tests: test_jupyterlab.py (chapter 1 in JupyterLab's UI) and
+# test_widgets_live.py (every widget of the library, live). Root conftest.py, tests/executed_book.py.
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
-	HUSKY_PROFILE=quick $(PY) -m pytest tests notebooks --nbval-lax -p no:cacheprovider
+	HUSKY_PROFILE=quick $(PY) -m pytest notebooks tests --nbval-lax --keep-executed -p no:cacheprovider
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)
 	$(PY) benchmarks/bench_collection.py

@@ -1,14 +1,14 @@
 """The built book in a real browser: every chapter loads, every figure shows, no internal link is broken.
 
 The book is built here, in the quick profile, with the Makefile's flags (``-W -n --keep-going``),
-into ``_build/browser-test/`` (never into ``_build/html``, which ``make book`` owns). ``--all``
-re-renders every page on every run, so the pages checked are never left over from an earlier
-build; only notebook *executions* are reused, from jupyter-book's cache, and that cache is wiped
-whenever the library, the requirements or the build config change (``library.sha256``). With the
-quick artifacts present the build takes seconds plus the execution of the chapters that changed.
-It cannot reuse nbval's executions in ``make test``: nbval runs the chapters with live widgets (a
-student's kernel), this build with ``HUSKY_STATIC_WIDGETS=1`` (the book's players), two code
-paths; the Makefile's ``test`` target has the measured cost of running both.
+into ``_build/browser-test/`` (never into ``_build/html``, which ``make book`` owns). In ``make test``
+nothing is executed twice: nbval has just run every chapter in the book's mode and kept its outputs
+(``--keep-executed``, ``tests/executed_book.py``), and when every chapter has a fresh execution the
+book is built from them with execution off. Otherwise (this file run alone, a chapter that failed
+under nbval) it executes the chapters itself with ``HUSKY_STATIC_WIDGETS=1``, as ``make book`` does;
+``--all`` re-renders every page on every run, so the pages checked are never left over from an
+earlier build; only notebook *executions* are reused, from jupyter-book's cache, and that cache is
+wiped whenever the library, the requirements or the build config change (``library.sha256``).
 
 Then every page of ``_toc.yml`` is opened in headless Chromium (driven by Playwright through the
 system browser's executable path, offline: see ``tests/book_browser.py``) and checked: it loads,
@@ -25,7 +25,6 @@ Without Chromium the tests skip, saying so, except under ``CI=true``, where they
 from __future__ import annotations
 
 import base64
-import hashlib
 import os
 import re
 import shutil
@@ -50,6 +49,7 @@ from book_browser import (
     png_size,
     screenshot,
 )
+from executed_book import build_fingerprint, fresh_executions, stage_book
 
 REPO = Path(__file__).resolve().parents[1]
 BUILD_FLAGS = ("-W", "-n", "--keep-going")  # the Makefile's `book` target
@@ -130,17 +130,6 @@ def planner_entry(entries: list[str]) -> str:
 
 
 # --- the build ---------------------------------------------------------------------------------
-def build_fingerprint() -> str:
-    """What notebook outputs depend on besides the notebooks' code: the library and the setup."""
-    digest = hashlib.sha256()
-    files = sorted((REPO / "husky_course").rglob("*.py"))
-    files += [REPO / name for name in ("requirements.txt", "pyproject.toml", "_config.yml")]
-    for path in files:
-        if path.is_file():
-            digest.update(str(path.relative_to(REPO)).encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
 def jupyter_book() -> str:
     exe = Path(sys.executable).parent / "jupyter-book"
     found = str(exe) if exe.is_file() else shutil.which("jupyter-book")
@@ -164,7 +153,11 @@ def book() -> dict:
     STAMP.write_text(fingerprint)  # the cache holds only executions made under this fingerprint
     env = {**os.environ, "HUSKY_PROFILE": "quick", "HUSKY_STATIC_WIDGETS": "1"}  # as `make book`
     env.pop("MPLBACKEND", None)  # as in the Makefile: kernels need the inline backend
-    cmd = [jupyter_book(), "build", str(REPO), "--path-output", str(OUT), "--all", *BUILD_FLAGS]
+    notebooks = [s for s in sources.values() if s.suffix == ".ipynb"]
+    executions = fresh_executions(notebooks)
+    source_dir = stage_book(OUT / "source", executions) if executions else REPO
+    print("book source:", f"nbval's runs of {len(executions)} chapters" if executions else "executed here")
+    cmd = [jupyter_book(), "build", str(source_dir), "--path-output", str(OUT), "--all", *BUILD_FLAGS]
     started = time.time()
     proc = subprocess.run(
         cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=BUILD_TIMEOUT_S, check=False
@@ -195,7 +188,8 @@ def book() -> dict:
             f"{sources[entry]} changed while the book was being built; run the test again"
         )
         pages[entry] = page
-    return {"entries": entries, "pages": pages, "sources": sources, "seconds": seconds}
+    return {"entries": entries, "pages": pages, "sources": sources, "seconds": seconds,
+            "reused": executions is not None}
 
 
 @pytest.fixture(scope="module")
