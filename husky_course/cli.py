@@ -10,6 +10,8 @@ Examples
 ``python -m husky_course train discs``, then ``evaluate --planner discs --worlds 500 --seed 0`` (reporting)
 ``python -m husky_course train memory --world moving`` (chapter 10's student, on moving obstacles)
 ``python -m husky_course evaluate --planner memory --world moving --trained-on static``
+``python -m husky_course evaluate --planner mapping --sensing realistic`` (chapter 11: a noisy camera,
+slipping wheels; ``--trained-with ideal`` runs a learned planner trained on ideal senses under them)
 ``python -m husky_course certify --profile full --worlds 2000 --workers 2`` (chapter 9's certificate,
 at another scale: its own artifact; ``train certificate`` builds the profile's)
 ``python -m husky_course clean --profile full --dry-run`` (the artifacts no current code or config makes)
@@ -25,7 +27,7 @@ import sys
 from dataclasses import replace
 
 from .checks import check_int
-from .config import PROFILES, WORLD_KINDS, ConfigError, get_profile, with_world
+from .config import PROFILES, SENSING, WORLD_KINDS, ConfigError, get_profile, with_sensing, with_world
 from .data.code import code_fingerprint, library_fingerprint
 from .data.collect import collect
 from .data.dataset import load_dataset, stats
@@ -60,6 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _engine_option(c)
     _world_option(c)
+    _sensing_option(c)
     s = sub.add_parser("stats", help="summarise a dataset")
     s.add_argument("dir", help="dataset directory")
     s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -105,6 +108,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="which course a learned planner was trained on (default: the --world it is evaluated on)",
     )
+    _sensing_option(e)
+    e.add_argument(
+        "--trained-with",
+        choices=tuple(SENSING),
+        default=None,
+        help="the senses a learned planner was trained with (default: the --sensing it is evaluated with)",
+    )
     t = sub.add_parser("train", help="train (or load) the chapters' models into the artifact store")
     t.add_argument("model", choices=(*TRAINABLE, "all"), help="which model ('all': every one, in order)")
     t.add_argument("--profile", default=None, help=f"one of {', '.join(PROFILES)} (default: $HUSKY_PROFILE)")
@@ -118,6 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _engine_option(t)
     _world_option(t)
+    _sensing_option(t)
     g = sub.add_parser(
         "certify",
         help="chapter 9's PAC-Bayes certificate for the memory student, at the profile's scale or another",
@@ -143,6 +154,16 @@ def _engine_option(p: argparse.ArgumentParser) -> None:
         default=None,
         help="where parallel work runs: local processes or Ray (default: $HUSKY_ENGINE, else local; "
         "ray attaches to $RAY_ADDRESS when set)",
+    )
+
+
+def _sensing_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--sensing",
+        choices=tuple(SENSING),
+        default="ideal",
+        help="the robot's senses: ideal (chapters 1-10), or a real depth camera's noise and slipping "
+        "wheels (chapter 11, husky_course.config.sensing); artifacts are keyed by it (default ideal)",
     )
 
 
@@ -177,7 +198,7 @@ def _train(args: argparse.Namespace) -> dict:
     from .course.diagnosis import get_diagnosis
     from .training.builders import BUILDERS
 
-    profile = with_world(get_profile(args.profile), args.world)
+    profile = with_sensing(with_world(get_profile(args.profile), args.world), args.sensing)
     progress = not args.no_progress
     if args.device is not None:
         set_device(args.device)
@@ -226,7 +247,7 @@ def _train(args: argparse.Namespace) -> dict:
 def _evaluate(args: argparse.Namespace) -> dict:
     """Run the ``evaluate`` subcommand and return the result's JSON dict."""
     base = get_profile(args.profile)
-    profile = with_world(base, args.world)
+    profile = with_sensing(with_world(base, args.world), args.sensing)
     if args.planner not in PLANNERS:
         raise PlannerError(f"unknown planner {args.planner!r}: choose one of {', '.join(PLANNERS)}")
     learned = args.planner in LEARNED_PLANNERS
@@ -235,10 +256,12 @@ def _evaluate(args: argparse.Namespace) -> dict:
         if not learned:
             raise PlannerError(f"--look-ahead applies only to {', '.join(LEARNED_PLANNERS)}")
         kwargs["look_ahead"] = check_look_ahead(args.look_ahead)
-    if args.trained_on is not None and not learned:
-        raise PlannerError(f"--trained-on applies only to {', '.join(LEARNED_PLANNERS)}")
+    for flag, value in (("--trained-on", args.trained_on), ("--trained-with", args.trained_with)):
+        if value is not None and not learned:
+            raise PlannerError(f"{flag} applies only to {', '.join(LEARNED_PLANNERS)}")
     if learned:
-        kwargs["profile"] = with_world(base, args.trained_on or args.world)
+        kwargs["profile"] = with_sensing(with_world(base, args.trained_on or args.world),
+                                         args.trained_with or args.sensing)
     if args.planner in ("heuristic", "mapping", "tracking", "discs"):  # they read the course (its speeds)
         kwargs["config"] = profile.sim
     if args.seed is None:  # every choice is made on the tuning set; the reporting set is asked for by name
@@ -258,9 +281,10 @@ def _evaluate(args: argparse.Namespace) -> dict:
         keep_paths=False,  # only the summary is printed
     )
     out = result.to_json()
-    out["world"] = args.world
+    out["world"], out["sensing"] = args.world, args.sensing
     if learned:
         out["trained_on"] = args.trained_on or args.world
+        out["trained_with"] = args.trained_with or args.sensing
     return out
 
 
@@ -304,7 +328,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "engine", None) is not None:
             set_engine(args.engine)  # reaches the labels that `train` computes without threading it through
         if args.command == "collect":
-            profile = with_world(get_profile(args.profile), args.world)
+            profile = with_sensing(with_world(get_profile(args.profile), args.world), args.sensing)
             if args.out is None:  # the store's directory for exactly this spec (its name is the spec's hash)
                 data = replace(
                     profile.data,

@@ -66,6 +66,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 worlds of {TUNING}[\s\S]*discs +arrivals +\d\.\d{{3}}"
         r"[\s\S]*tracking +worlds won only with arrivals: \d+",
     ),
+    "exp_moving_doubt.py": (
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--planners", "tracking",
+         "--settings", "off,hard 0.5"],
+        rf"3 worlds of {TUNING}[\s\S]*tracking +hard 0.5 +\d\.\d{{3}} .*only without: \d+",
+    ),
     "exp_moving_ladder.py": (
         ["--profile", "quick", "--worlds", "3"],
         rf"3 moving tuning worlds \({TUNING}\)[\s\S]*90% of the oracle \(the goal\) +\d\.\d{{3}}",

@@ -35,6 +35,7 @@ from .planning import (
     OracleConfig,
     TrackingConfig,
 )
+from .sensing import SENSING, SensingConfig, SensingError, get_sensing
 from .sim import (
     WORLD_KINDS,
     CameraConfig,
@@ -53,10 +54,11 @@ __all__ = [
     "ArrivalsConfig", "CalibrationConfig", "CameraConfig", "ConfigError", "CourseConfig",
     "DataConfig", "DiscConfig", "EVAL_SEED_BASE", "EvalPlan", "GuaranteeConfig", "HeuristicConfig",
     "MappingConfig", "MemoryConfig", "ModelConfig", "ModelDims", "MovingWorldConfig", "OracleConfig",
-    "PROFILES", "PROFILE_ENV", "PrimitiveConfig", "Profile", "SimConfig", "TrackingConfig", "TrainConfig",
+    "PROFILES", "PROFILE_ENV", "PrimitiveConfig", "Profile", "SENSING", "SensingConfig", "SensingError",
+    "SimConfig", "TrackingConfig", "TrainConfig",
     "TrainingPlan", "WORLD_KINDS", "WorldConfig", "check_profile", "check_profile_name", "check_world_kind",
-    "config_hash", "get_profile", "model_dims", "sim_for_world", "to_dict", "with_world", "world_flag",
-    "world_kind",
+    "config_hash", "get_profile", "get_sensing", "model_dims", "sim_for_world", "to_dict", "with_sensing",
+    "with_world", "world_flag", "world_kind",
 ]
 
 PROFILES = ("quick", "full")
@@ -141,6 +143,14 @@ def _profiles() -> dict[str, Profile]:
 def with_world(profile: Profile, kind: str) -> Profile:
     """``profile`` on the static or the moving course (same everything else; artifacts keyed by it)."""
     return replace(profile, sim=sim_for_world(profile.sim, kind))
+
+
+def with_sensing(profile: Profile, sensing: SensingConfig | str) -> Profile:
+    """``profile`` with ``sensing`` (a :class:`SensingConfig` or a preset's name); artifacts keyed by it."""
+    chosen = get_sensing(sensing) if isinstance(sensing, str) else sensing
+    if not isinstance(chosen, SensingConfig):
+        raise SensingError(f"expected a SensingConfig or a preset name, got {sensing!r}")
+    return replace(profile, sim=replace(profile.sim, sensing=chosen))
 
 
 def check_profile_name(name: str) -> str:

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from .sensing import SENSING, SensingConfig
+
 
 class ConfigError(ValueError):
     """A configuration value, profile or world name that the course cannot use."""
@@ -98,6 +100,7 @@ class SimConfig:
     camera: CameraConfig = field(default_factory=CameraConfig)
     primitives: PrimitiveConfig = field(default_factory=PrimitiveConfig)
     max_primitives: int = 10  #: a video (episode) ends after this many primitives
+    sensing: SensingConfig = field(default_factory=SensingConfig)  #: ideal, or a real robot's (chapter 11)
 
 
 def check_world_kind(kind: str) -> str:
@@ -113,8 +116,11 @@ def world_kind(sim: SimConfig) -> str:
 
 
 def world_flag(sim: SimConfig) -> str:
-    """The command-line flag that selects ``sim``'s course (empty for the default, static)."""
-    return " --world moving" if world_kind(sim) == "moving" else ""
+    """The command-line flags that select ``sim``'s course and senses (empty for the defaults, the
+    static course and ideal senses; no ``--sensing`` for senses that are not a preset)."""
+    flag = " --world moving" if world_kind(sim) == "moving" else ""
+    preset = [name for name, cfg in SENSING.items() if cfg == sim.sensing]
+    return flag + (f" --sensing {preset[0]}" if preset and preset[0] != "ideal" else "")
 
 
 def sim_for_world(sim: SimConfig, kind: str) -> SimConfig:

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import SimConfig
+from ..config import ArrivalsConfig, SimConfig
 from ..models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
 from .arrivals import Arrivals
 from .mapping import MappingPlanner
@@ -353,10 +353,20 @@ class DiscTrackingPlanner(DiscPlanner):
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
-                 **kwargs: float) -> None:
+                 doubt_steps: float = ArrivalsConfig.doubt_steps,
+                 doubt_hard: bool = ArrivalsConfig.doubt_hard, **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
+        self.doubt_steps, self.doubt_hard = float(doubt_steps), bool(doubt_hard)
+        self.max_walk = float(getattr(self.config.world, "speed_range", (0.0, 0.0))[1])
+
+    @property
+    def doubtful(self) -> np.ndarray:
+        """Per point: a first-sight disc the arrivals rule left standing (it may yet walk either way)."""
+        m = self.map
+        discs = m.fresh & (m.speeds == 0)  # type: ignore[attr-defined]
+        return np.r_[discs, np.zeros(len(self.points) - len(discs), bool)]
 
     @property
     def velocity(self) -> np.ndarray:

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import MappingConfig, SimConfig
+from ..config import ArrivalsConfig, MappingConfig, SimConfig
 from ..sim.lattice import EdgeCheck
 from .mapping import MappingPlanner
 from .motion import WalkingMap
@@ -46,22 +46,34 @@ class TrackingPlanner(MappingPlanner):
     name = "tracking"  #: the mapping planner, with motion
 
     def __init__(self, config: SimConfig | None = None, horizon: int = MappingConfig.horizon,
-                 arrivals: bool = True, **kwargs: float) -> None:
+                 arrivals: bool = True, doubt_steps: float = ArrivalsConfig.doubt_steps,
+                 doubt_hard: bool = ArrivalsConfig.doubt_hard, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
+        self.doubt_steps, self.doubt_hard = float(doubt_steps), bool(doubt_hard)
+        self.max_walk = float(getattr(self.config.world, "speed_range", (0.0, 0.0))[1])
 
     @property
     def velocity(self) -> np.ndarray:
         """Each map point's estimated lateral velocity (m per step)."""
         return self.map.velocity
 
+    @property
+    def doubtful(self) -> np.ndarray:
+        """Per map point: a first sight the arrivals rule left standing (it may yet walk either way)."""
+        return self.map.fresh & (self.map.velocity == 0)
+
     def _edge_check(self, horizon: int) -> EdgeCheck:
         """Standing points on the mapping planner's clearance grid; each walking point exactly, where
-        it is at every sample's time."""
+        it is at every sample's time. With ``doubt_steps``, each doubtful point (:attr:`doubtful`)
+        also stands for the band it could have walked to by a sample's time (up to ``doubt_steps``
+        steps, at the course's fastest walk): the band counts in the clearance a plan is ranked by,
+        and with ``doubt_hard`` an edge that enters it is infeasible."""
         walking = self.velocity != 0
         reach = self.radius + self.margin + self.cap
         grid = self._grid(self.points[~walking], horizon)
         movers, speeds = self.points[walking], self.velocity[walking]
+        doubt = self.points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
 
         def check(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             gap = grid(x, y)
@@ -69,6 +81,13 @@ class TrackingPlanner(MappingPlanner):
             for (px, py, r), v in zip(movers[near], speeds[near], strict=True):  # where it is at each sample
                 np.minimum(gap, np.hypot(x - px, y - (py + v * t)) - r, out=gap)
             clear = gap.min(-1) - self.radius
-            return clear < self.margin, clear - self.margin
+            near = np.flatnonzero((doubt[:, 0] > x.min() - reach) & (doubt[:, 0] < x.max() + reach))
+            if not len(near):
+                return clear < self.margin, clear - self.margin
+            band = self.max_walk * np.minimum(t, self.doubt_steps)
+            for px, py, r in doubt[near]:  # the nearest place it could be, standing or walking
+                np.minimum(gap, np.hypot(x - px, np.maximum(0.0, np.abs(y - py) - band)) - r, out=gap)
+            doubted = gap.min(-1) - self.radius
+            return (doubted if self.doubt_hard else clear) < self.margin, doubted - self.margin
 
         return check

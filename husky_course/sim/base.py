@@ -18,7 +18,8 @@ import numpy as np
 
 from ..config import SimConfig
 from .primitives import PrimitiveLibrary, make_library
-from .world import World, make_world
+from .sensing import executed_path, noisy_depth
+from .world import World, make_world, pose_times
 
 
 @dataclass(frozen=True)
@@ -69,10 +70,21 @@ class Simulator:
     def _load(self, world: World) -> None:
         raise NotImplementedError
 
+    def _depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+        """The renderer's normalised depth images (what :meth:`depth` reports under ideal sensing)."""
+        raise NotImplementedError
+
     def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
         """Normalised depth images ``(B, size, size)`` float32 in [0, 1] for robot poses ``(B, 3)``
-        at times ``t`` (a number, or one per pose)."""
-        raise NotImplementedError
+        at times ``t`` (a number, or one per pose), as the camera reports them: the renderer's
+        under ideal sensing, else with the sensor's noise (:mod:`husky_course.sim.sensing`)."""
+        images = self._depth(poses, t)
+        sensing = self.config.sensing
+        if sensing.camera_ideal:
+            return images
+        poses = np.asarray(poses, float).reshape(-1, 3)
+        world = self._require_world()
+        return noisy_depth(images, poses, pose_times(t, len(poses)), world.seed, sensing, self.config.camera)
 
     def rgb(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:
         """An RGB view ``(size, size, 3)`` uint8 from the onboard camera at time ``t``, for display."""
@@ -88,9 +100,10 @@ class Simulator:
 
     # --- shared logic --------------------------------------------------------------------------
     def apply(self, pose: np.ndarray, index: int, t: float = 0.0) -> StepResult:
-        """Play primitive ``index`` back from ``pose``, starting at time ``t``, against the loaded world."""
-        self._require_world()
-        path = self.library.path_from(pose, index)
+        """Play primitive ``index`` back from ``pose``, starting at time ``t``, against the loaded world
+        (the path the wheels execute: the library's under ideal sensing, :mod:`husky_course.sim.sensing`)."""
+        world = self._require_world()
+        path = executed_path(self.library, pose, index, self.config.sensing, world.seed, t)
         hit = self.contact_along(path, t)
         if hit < 0:
             return StepResult(False, path[-1].copy(), path)

@@ -12,6 +12,10 @@
 world); ``reset(options={"world_seed": w})`` picks a world without touching the RNG, and
 ``options={"world": "moving"}`` (or ``HuskyNavEnv(world="moving")``) switches to the moving-obstacle
 course (``"static"`` back): step ``k`` is time ``k`` there (see :mod:`husky_course.sim.world`).
+``HuskyNavEnv(sensing="realistic")`` or ``options={"sensing": "realistic"}`` gives the robot a real
+depth camera's noise and slipping wheels (chapter 11, :mod:`husky_course.config.sensing`; a
+:class:`~husky_course.config.SensingConfig` is accepted too); ``"ideal"`` is the default. ``info``
+then holds ``sensing``, its name.
 
 Importing this module registers the environment as ``HuskyNav-v0`` (:func:`husky_course.register_env`),
 so ``gymnasium.make("HuskyNav-v0")`` works after it.
@@ -19,6 +23,7 @@ so ``gymnasium.make("HuskyNav-v0")`` works after it.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -26,9 +31,24 @@ import numpy as np
 from gymnasium import spaces
 
 from .. import register_env
-from ..config import SimConfig, check_world_kind, sim_for_world, world_kind
+from ..config import (
+    SensingConfig,
+    SensingError,
+    SimConfig,
+    check_world_kind,
+    get_sensing,
+    sim_for_world,
+    world_kind,
+)
 from .backends import make_simulator
 from .world import check_seed
+
+
+def _with_sensing(config: SimConfig, sensing: str | SensingConfig) -> SimConfig:
+    chosen = get_sensing(sensing) if isinstance(sensing, str) else sensing
+    if not isinstance(chosen, SensingConfig):
+        raise SensingError(f"sensing must be a preset name or a SensingConfig, got {sensing!r}")
+    return replace(config, sensing=chosen)
 
 
 class HuskyNavEnv(gym.Env):
@@ -42,6 +62,7 @@ class HuskyNavEnv(gym.Env):
         config: SimConfig | None = None,
         render_mode: str | None = "rgb_array",
         world: str | None = None,
+        sensing: str | SensingConfig | None = None,
     ) -> None:
         super().__init__()
         if render_mode not in (None, "rgb_array"):
@@ -49,7 +70,8 @@ class HuskyNavEnv(gym.Env):
         self.render_mode = render_mode
         self.backend = backend
         config = config or SimConfig()
-        self.sim = make_simulator(backend, config if world is None else sim_for_world(config, world))
+        config = config if world is None else sim_for_world(config, world)
+        self.sim = make_simulator(backend, config if sensing is None else _with_sensing(config, sensing))
         cfg = self.sim.config
         size = cfg.camera.size
         self.action_space = spaces.Discrete(self.sim.library.n)
@@ -76,18 +98,24 @@ class HuskyNavEnv(gym.Env):
             "world_seed": self.sim.world.seed,
             "step": self.steps,
             "world": self.world,
+            "sensing": self.sim.config.sensing.name,
         }
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        unknown = set(options or {}) - {"world_seed", "world"}
+        unknown = set(options or {}) - {"world_seed", "world", "sensing"}
         if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}: use 'world_seed' and 'world'")
-        if options and "world" in options and check_world_kind(options["world"]) != self.world:
+            raise ValueError(f"unknown reset options {sorted(unknown)}: use 'world_seed', 'world', 'sensing'")
+        config = self.sim.config
+        if options and "world" in options:
+            config = sim_for_world(config, check_world_kind(options["world"]))
+        if options and "sensing" in options:
+            config = _with_sensing(config, options["sensing"])
+        if config != self.sim.config:
             self.sim.close()
-            self.sim = make_simulator(self.backend, sim_for_world(self.sim.config, options["world"]))
+            self.sim = make_simulator(self.backend, config)
         if options and "world_seed" in options:
             world_seed = check_seed(options["world_seed"])
         elif seed is not None:

@@ -155,7 +155,7 @@ class FastSimulator(Simulator):
             out[i : i + _CHUNK] = np.clip(t, cfg.near, cfg.far)
         return out
 
-    def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+    def _depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
         return normalize_depth(self.depth_metres(poses, t), self.config.camera)
 
     def rgb(self, pose: np.ndarray, t: float = 0.0) -> np.ndarray:

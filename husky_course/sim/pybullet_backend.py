@@ -215,7 +215,7 @@ class PyBulletSimulator(Simulator):
         depth = np.asarray(depth, np.float64).reshape(size, size)
         return rgb, depth
 
-    def depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
+    def _depth(self, poses: np.ndarray, t: np.ndarray | float = 0.0) -> np.ndarray:
         poses = np.asarray(poses, float).reshape(-1, 3)
         times = pose_times(t, len(poses))
         cam = self.config.camera

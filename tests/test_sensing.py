@@ -1,0 +1,222 @@
+"""A real robot's senses (husky_course.config.sensing, husky_course.sim.sensing): the noise is what the
+config says, ideal is today's simulator bit for bit, the same seed gives the same bytes, both
+backends see the same noise, and bad settings get a clear error."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from husky_course.config import (
+    SENSING,
+    CameraConfig,
+    SensingConfig,
+    SensingError,
+    SimConfig,
+    get_profile,
+    get_sensing,
+    sim_for_world,
+    with_sensing,
+    world_flag,
+)
+from husky_course.sim.camera import denormalize_depth, normalize_depth
+from husky_course.sim.fast import FastSimulator
+from husky_course.sim.primitives import make_library
+from husky_course.sim.sensing import depth_edges, executed_local_path, executed_path, noisy_depth
+
+REALISTIC = SENSING["realistic"]
+CAMERA = CameraConfig()
+
+#: sha256 (first 16 hex digits) of depth images and played-back paths of 4 worlds x 3 steps, computed
+#: with the simulator as it was before sensing existed (commit fc4c264): ideal senses must match.
+BEFORE_SENSING = {
+    ("static", "fast"): "abf8d1194f1071a3", ("static", "pybullet"): "7a0c07d1d4fe6d9b",
+    ("moving", "fast"): "7ce9c75af77e2df8", ("moving", "pybullet"): "7bc06b65156e5b2c",
+}
+
+
+def sim_digest(sim) -> str:
+    """The digest of :data:`BEFORE_SENSING` (same worlds, poses, primitives)."""
+    h = hashlib.sha256()
+    rng = np.random.default_rng(0)
+    for seed in range(4):
+        world = sim.load(seed)
+        pose = world.start.copy()
+        for step in range(3):
+            h.update(sim.depth(pose[None], step).tobytes())
+            r = sim.apply(pose, int(rng.integers(25)), step)
+            h.update(r.path.tobytes())
+            h.update(bytes([r.collided]))
+            pose = r.pose
+    return h.hexdigest()[:16]
+
+
+@pytest.mark.parametrize("kind", ["static", "moving"])
+@pytest.mark.parametrize("backend", ["fast", "pybullet"])
+def test_ideal_senses_are_the_simulator_before_sensing_bit_for_bit(kind, backend):
+    from husky_course.sim.backends import make_simulator
+
+    with make_simulator(backend, sim_for_world(SimConfig(), kind)) as sim:
+        assert sim.config.sensing == get_sensing("ideal")
+        assert sim_digest(sim) == BEFORE_SENSING[(kind, backend)]
+
+
+def flat_images(z: float, n: int) -> np.ndarray:
+    return np.repeat(normalize_depth(np.full((1, 50, 50), z), CAMERA), n, axis=0)
+
+
+def poses(n: int) -> np.ndarray:
+    return np.c_[np.arange(n) * 0.01, np.zeros(n), np.zeros(n)]
+
+
+@pytest.mark.parametrize("z", [1.0, 2.0, 3.5])
+def test_depth_error_has_the_configured_mean_and_sigma(z):
+    """sigma = sigma_k z**2 on 100,000 pixels: mean and sigma within 4 standard errors."""
+    cfg = replace(REALISTIC, dropout=0.0, min_range=0.0)
+    n = 40
+    out = noisy_depth(flat_images(z, n), poses(n), np.zeros(n), 7, cfg, CAMERA)
+    err = denormalize_depth(out, CAMERA).ravel() - denormalize_depth(flat_images(z, 1), CAMERA)[0, 0, 0]
+    sigma = cfg.sigma_k * z**2
+    count = err.size
+    assert abs(err.mean()) < 4 * sigma / np.sqrt(count)
+    assert abs(err.std() - sigma) < 4 * sigma / np.sqrt(2 * count) + cfg.depth_unit / 2
+    grid = denormalize_depth(out, CAMERA).ravel() / cfg.depth_unit  # depth rounded to the unit (float32)
+    assert np.abs(grid - np.round(grid)).max() < 1e-3
+
+
+def test_dropout_rate_and_min_range():
+    n = 40
+    cfg = replace(REALISTIC, dropout=0.05)
+    out = noisy_depth(flat_images(2.0, n), poses(n), np.zeros(n), 3, cfg, CAMERA)
+    share, count = float((out == 1.0).mean()), out.size
+    assert abs(share - 0.05) < 4 * np.sqrt(0.05 * 0.95 / count)
+    close = noisy_depth(flat_images(0.08, 2), poses(2), np.zeros(2), 3, cfg, CAMERA)
+    assert (close == 1.0).all()  # under the D435's minimum depth: no reading
+
+
+def test_edge_dropout_only_on_the_far_side_of_an_edge():
+    z = np.full((50, 50), 1.0)
+    z[:, 25:] = 3.0  # a step: columns 25.. are the far side
+    edges = depth_edges(z, 0.3)
+    assert edges[:, 25].all() and not edges[:, 24].any() and edges.sum() == 50
+    cfg = replace(REALISTIC, dropout=0.0, edge_dropout=1.0, sigma_k=0.0)
+    out = noisy_depth(normalize_depth(z[None], CAMERA), poses(1), np.zeros(1), 0, cfg, CAMERA)[0]
+    assert (out[:, 25] == 1.0).all() and (out[:, 26:] < 1.0).all() and (out[:, :25] < 1.0).all()
+
+
+def test_same_seed_same_bytes_other_seed_other_noise():
+    sim_a = FastSimulator(replace(SimConfig(), sensing=REALISTIC))
+    sim_b = FastSimulator(replace(SimConfig(), sensing=REALISTIC))
+    sim_c = FastSimulator(replace(SimConfig(), sensing=replace(REALISTIC, seed=1)))
+    shots = []
+    for sim in (sim_a, sim_b, sim_c):
+        world = sim.load(11)
+        r = sim.apply(world.start, 20, 0)
+        shots.append((sim.depth(world.start[None], 0).tobytes(), r.path.tobytes()))
+    assert shots[0] == shots[1]
+    assert shots[0][0] != shots[2][0] and shots[0][1] != shots[2][1]
+    world = sim_a.load(11)
+    a, b = sim_a.depth(world.start[None], 0), sim_a.depth(world.start[None], 1)
+    assert not np.array_equal(a, b)  # another step, another draw (a static world: same true image)
+    two = sim_a.depth(np.stack([world.start, world.start + (0.1, 0, 0)]), 0)
+    assert np.array_equal(two[0], a[0])  # a batch: each pose its own draw, the same as alone
+
+
+def test_executed_path_slips_as_configured():
+    lib = make_library()
+    local = lib.local_paths[20]
+    assert np.array_equal(executed_local_path(local, 1.0, 0.0), local)
+    slipped = executed_local_path(local, 1.05, np.radians(3))
+    lengths = [np.linalg.norm(np.diff(p[:, :2], axis=0), axis=1).sum() for p in (local, slipped)]
+    assert lengths[1] / lengths[0] == pytest.approx(1.05, rel=1e-9)
+    assert slipped[-1, 2] - local[-1, 2] == pytest.approx(np.radians(3))
+    pose = np.array([1.0, -2.0, 0.3])
+    assert np.array_equal(executed_path(lib, pose, 20, get_sensing("ideal"), 5, 0.0), lib.path_from(pose, 20))
+    real = executed_path(lib, pose, 20, REALISTIC, 5, 0.0)
+    assert np.array_equal(real[0], pose) and np.abs(real[-1] - lib.end_pose(pose, 20)).max() > 1e-4
+
+
+def test_executed_motion_spread_matches_the_config():
+    """End-point spread over many draws: length factor sigma and heading sigma as configured."""
+    lib = make_library()
+    pose = np.zeros(3)
+    ends = np.array([executed_path(lib, pose, 12, REALISTIC, w, 0.0)[-1] for w in range(2000)])
+    length = np.hypot(ends[:, 0], ends[:, 1]) / np.hypot(*lib.end_pose(pose, 12)[:2])
+    heading = np.degrees(ends[:, 2])
+    n = len(ends)
+    assert abs(length.std() - REALISTIC.slip_scale) < 4 * REALISTIC.slip_scale / np.sqrt(2 * n)
+    assert abs(heading.std() - REALISTIC.slip_heading_deg) < 4 * REALISTIC.slip_heading_deg / np.sqrt(2 * n)
+
+
+def test_both_backends_see_the_same_noise():
+    """The noise is applied by the shared code: where the two renderers agree (all but a few edge
+    pixels), the realistic images agree, and the executed paths are identical."""
+    from husky_course.sim.pybullet_backend import PyBulletSimulator
+
+    cfg = replace(SimConfig(), sensing=REALISTIC)
+    fast, ref = FastSimulator(cfg), PyBulletSimulator(cfg)
+    rng = np.random.default_rng(5)
+    try:
+        agree = []
+        for w in rng.integers(0, 10_000, 8):
+            world = fast.load(int(w))
+            ref.load(int(w))
+            pose = world.start + (rng.uniform(0, 2), rng.uniform(-0.5, 0.5), rng.uniform(-0.3, 0.3))
+            a, b = fast.depth(pose[None], 2)[0], ref.depth(pose[None], 2)[0]
+            agree.append(np.mean(np.abs(a - b) <= 1e-3))
+            k = int(rng.integers(25))
+            assert np.array_equal(fast.apply(pose, k, 2).path, ref.apply(pose, k, 2).path)
+    finally:
+        ref.close()
+    print(f"pixels agreeing within 1e-3: min {min(agree):.4f} over {len(agree)} views")
+    assert min(agree) >= 0.98
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"sigma_k": -0.01}, "sigma_k must be a finite number >= 0"),
+        ({"dropout": 1.5}, "dropout must be at most 1"),
+        ({"slip_scale": float("nan")}, "slip_scale must be a finite number"),
+        ({"edge_jump": 0.0}, "edge_jump"),
+    ],
+)
+def test_bad_settings_are_refused(change, message):
+    with pytest.raises(SensingError, match=message):
+        SensingConfig(**change)
+
+
+def test_unknown_sensing_is_refused_everywhere():
+    with pytest.raises(SensingError, match="unknown sensing 'noisy': choose one of ideal, realistic"):
+        get_sensing("noisy")
+    with pytest.raises(SensingError, match="unknown sensing"):
+        with_sensing(get_profile("quick"), "noisy")
+    from husky_course.sim.env import HuskyNavEnv
+
+    with pytest.raises(SensingError, match="unknown sensing"):
+        HuskyNavEnv(sensing="noisy")
+    proc = subprocess.run([sys.executable, "-m", "husky_course", "evaluate", "--planner", "random",
+                           "--sensing", "noisy"], capture_output=True, text=True, check=False)
+    assert proc.returncode == 2 and "invalid choice: 'noisy'" in proc.stderr
+
+
+def test_the_cli_and_the_env_take_the_sensing():
+    command = [sys.executable, "-m", "husky_course", "evaluate", "--planner", "random", "--worlds", "3",
+               "--sensing", "realistic", "--json", "--no-progress"]
+    proc = subprocess.run(command, capture_output=True, text=True, check=True)
+    assert json.loads(proc.stdout)["sensing"] == "realistic"
+    from husky_course.sim.env import HuskyNavEnv
+
+    env = HuskyNavEnv()
+    obs_ideal, info = env.reset(seed=4)
+    assert info["sensing"] == "ideal"
+    obs_real, info = env.reset(seed=4, options={"sensing": "realistic"})
+    assert info["sensing"] == "realistic" and not np.array_equal(obs_ideal, obs_real)
+    assert world_flag(with_sensing(get_profile("quick"), "realistic").sim) == " --sensing realistic"
+    assert world_flag(with_sensing(get_profile("quick"), REALISTIC.scaled(2)).sim) == ""
