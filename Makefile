@@ -40,6 +40,7 @@ data: install  ## build the dataset and train the models the chapters need, once
 	$(PY) -m husky_course collect --profile $(PROFILE) --workers 2 > /dev/null
 	$(PY) -m husky_course train all --profile $(PROFILE) > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile $(PROFILE) > /dev/null
+	$(PY) -m husky_course train discs --sensing realistic --profile $(PROFILE) > /dev/null
 
 book: data  ## execute every chapter (full profile by default) and build the HTML book
 	@$(MAKE) --no-print-directory book-cache
@@ -80,6 +81,7 @@ test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
+	$(PY) -m husky_course train discs --sensing realistic --profile quick --no-progress > /dev/null
 	HUSKY_PROFILE=quick $(PY) -m pytest notebooks tests --nbval-lax --keep-executed -p no:cacheprovider
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)

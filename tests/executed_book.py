@@ -78,6 +78,8 @@ def write_executed(source: Path, outputs: dict[int, list], library: str) -> Path
         cell.outputs = [nbformat.from_dict(output_of(o)) for o in outputs[i]]
         cell.execution_count = i + 1
     nb.metadata[KEY] = stamp(source, library)
+    # what an executing kernel records and nbval's outputs lack: the book's highlighter needs it
+    nb.metadata.setdefault("language_info", {"name": "python", "pygments_lexer": "ipython3"})
     nbformat.validate(nb)
     EXECUTED.mkdir(parents=True, exist_ok=True)
     target = EXECUTED / source.name

@@ -49,7 +49,8 @@ CASES = [(p.name[:2], call, name) for p in CHAPTERS for call, name in exercise_c
 
 
 def test_every_chapter_has_a_checked_exercise():
-    assert len(CHAPTERS) == 10
+    toc = (Path(__file__).resolve().parents[1] / "_toc.yml").read_text()
+    assert len(CHAPTERS) == toc.count("file: notebooks/") >= 11
     assert {p.name[:2] for p in CHAPTERS} == {chapter for chapter, _, _ in CASES}
 
 
@@ -188,6 +189,23 @@ def _arc_centre(ds):
     return {"arc": arc, "r": r, "moving": MOVING}, {"your_centre": far}, {"your_centre": arc.mean(0)}
 
 
+def _depth_sigma(ds):
+    """As chapter 11's exercise asks: pixels within 5 cm of 2 m, each one's spread over the views."""
+    from husky_course.config import SENSING, with_sensing
+    from husky_course.course import senses
+    from husky_course.evaluation.episodes import eval_world_seeds
+    from husky_course.sim.fast import FastSimulator
+
+    real, ideal = FastSimulator(with_sensing(QUICK, "realistic").sim), FastSimulator(QUICK.sim)
+    seed = int(eval_world_seeds(1, QUICK.eval.seed)[0])
+    start = real.load(seed).start
+    ideal.load(seed)
+    views, truth = senses.repeated_views(real, start, 60), senses.repeated_views(ideal, start, 1)[0]
+    near = (np.abs(truth - 2.0) < 0.05) & (views < QUICK.sim.camera.far).all(axis=0)
+    sigma = float(views[:, near].std(axis=0, ddof=1).mean())
+    return {"REALISTIC": SENSING["realistic"]}, {"your_sigma": sigma}, {"your_sigma": sigma**2}
+
+
 ANSWERS = {
     "check_ray_factor": _ray_factor,
     "check_naive_pairs": _naive_pairs,
@@ -203,6 +221,7 @@ ANSWERS = {
     "check_mover_position": _mover_position,
     "check_sample_time": _sample_time,
     "check_arc_centre": _arc_centre,
+    "check_depth_sigma": _depth_sigma,
 }
 
 

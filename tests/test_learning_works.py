@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from husky_course.config import Profile, get_profile, with_world
+from husky_course.config import Profile, get_profile, with_sensing, with_world
 from husky_course.data.store import ARTIFACTS_ENV
 from husky_course.evaluation.episodes import evaluate
 from husky_course.planners.base import Planner, PlannerError
@@ -21,7 +21,8 @@ from husky_course.sim.fast import FastSimulator
 QUICK = get_profile("quick")
 WORLDS, EVAL_SET = 200, 3
 BUILD = ("`python -m husky_course train all --profile quick` (and, for chapter 10's student, "
-         "`python -m husky_course train memory --world moving --profile quick`)")
+         "`python -m husky_course train memory --world moving --profile quick`; for chapter 11's disc "
+         "network, `python -m husky_course train discs --sensing realistic --profile quick`)")
 
 
 def trained(name: str, profile: Profile = QUICK) -> Planner:
@@ -69,3 +70,34 @@ def test_memory_student_beats_the_hand_written_heuristic(results):
     """Non-overlapping exact 95% intervals on the 200 test-only worlds."""
     memory, heuristic = results["memory"], results["heuristic"]
     assert memory.success_ci95[0] > heuristic.success_ci95[1], (memory.success_ci95, heuristic.success_ci95)
+
+
+def test_training_with_noise_helps_the_disc_network_under_noise():
+    """Chapter 11: the disc network trained on realistic views against the one trained on ideal views.
+
+    The strongest ordering the quick profile supports, measured: on the realistic network's held-out
+    views (the worlds it never trained on) its loss is lower, by a wide margin; as planners under
+    realistic senses, on the 200 test-only worlds, the noise-trained one is not worse (0.935 against
+    0.930 when this test was written: 3 worlds against 2 that only one crosses, too few to call a
+    gain; the full profile's reporting set is chapter 11's table).
+    """
+    import numpy as np
+    import torch
+
+    from husky_course.data.io import load_npz
+    from husky_course.imitation.discs import _tensors
+    from husky_course.training.discs import disc_dir
+
+    real = with_sensing(QUICK, "realistic")
+    noisy_net, ideal_net = trained("discs", real).model, trained("discs", QUICK).model
+    views = load_npz(disc_dir(real) / "pieces.npz")
+    held_out = _tensors(views, np.flatnonzero(views["world_seed"] % 10 == 0))
+    with torch.no_grad():
+        loss_noisy, loss_ideal = float(noisy_net.loss(held_out)), float(ideal_net.loss(held_out))
+    print(f"held-out realistic views: loss {loss_noisy:.4f} trained with noise, {loss_ideal:.4f} without")
+    assert loss_noisy < 0.9 * loss_ideal
+
+    sim = FastSimulator(real.sim)
+    noisy = evaluate(trained("discs", real), WORLDS, EVAL_SET, sim=sim, progress=False)
+    ideal = evaluate(trained("discs", QUICK), WORLDS, EVAL_SET, sim=sim, progress=False)
+    assert noisy.success_rate >= ideal.success_rate, (noisy.success_rate, ideal.success_rate)

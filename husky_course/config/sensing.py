@@ -79,6 +79,8 @@ class SensingConfig:
         and the edge threshold are the sensor's and stay."""
         if not math.isfinite(factor) or factor < 0:
             raise SensingError(f"a noise factor must be a finite number >= 0, got {factor!r}")
+        if factor == 1:
+            return self  # the same senses, the same artifacts
         return replace(
             self, name=f"{self.name} x{factor:g}", sigma_k=self.sigma_k * factor,
             dropout=min(1.0, self.dropout * factor), edge_dropout=min(1.0, self.edge_dropout * factor),

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..config import CameraConfig, SimConfig
+from ..config import CameraConfig, SensingConfig, SimConfig
 from ..data.dataset import Dataset
 
 
@@ -301,3 +301,23 @@ def check_arc_centre(arc: np.ndarray, r: float, centre: np.ndarray, sim: SimConf
                              "the camera sees the cylinder's near side")
     mean_off = float(np.hypot(*(arc.mean(0) - centre)))
     return _ok(f"centre ({centre[0]:.3f}, {centre[1]:.3f}); the points' mean is {mean_off:.3f} m from it")
+
+
+def check_depth_sigma(sensing: SensingConfig, depth: float, sigma: float) -> bool:
+    """Chapter 11: the depth camera's error (standard deviation, m) at ``depth`` m, estimated from
+    repeated views. Right within 15% of ``sensing.sigma_k * depth**2`` (an estimate from a few hundred
+    views is within a few percent of it)."""
+    want = sensing.sigma_k * depth**2
+    got = float(sigma)
+    if want <= 0:
+        raise AssertionError("these senses are ideal: the camera has no error; use the realistic ones")
+    if not abs(got - want) <= 0.15 * want:
+        camera = CameraConfig()
+        hint = (
+            "that looks like a variance: take its square root" if math.isclose(got, want**2, rel_tol=0.3)
+            else "that looks like normalised depth: multiply by far - near to get metres"
+            if math.isclose(got * (camera.far - camera.near), want, rel_tol=0.15)
+            else "take one pixel's depth over the views (the scene stays), then its standard deviation"
+        )
+        raise AssertionError(f"{got:.4f} m is not it: {hint}")
+    return _ok(f"sigma = {want * 100:.1f} cm at {depth:g} m: the error grows with the square of the depth")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import torch
 
-from ..config import Profile, to_dict, with_world
+from ..config import Profile, to_dict, with_world, world_flag
 from ..data.code import code_fingerprint
 from ..data.store import model_dir
 from ..models.discs import PIECE_FEATURES, DiscNet
@@ -56,7 +56,8 @@ def load_discs(profile: Profile) -> tuple[DiscNet, History, str]:
     if not path.is_file():
         raise CheckpointError(
             f"no trained disc network for profile {profile.name!r} (expected {path}); train it with "
-            f"`python -m husky_course train discs --profile {profile.name}`"
+            f"`python -m husky_course train discs --profile {profile.name}"
+            f"{world_flag(with_world(profile, 'static').sim)}`"
         )
     model = new_disc_net(profile)
     history = load_model(path, model, {**disc_fingerprint(profile), "train": asdict(profile.discs.train)})
