@@ -302,5 +302,8 @@ else:
 #    printed above.
 # 3. The holes read as "nothing within range". Change `no reading` to "nearer than anything"
 #    (`near`) in a copy of `husky_course.sim.sensing.noisy_depth`: which planners gain, and which lose?
-# 4. Train the memory student with realistic senses (`python -m husky_course train memory --sensing
-#    realistic`) and add it to the table. Does training with noise help it as much as the disc network?
+# 4. The memory student's teacher searches the lattice from every pose the student visits, and the
+#    lattice assumes the library's headings (0 between primitives). Under slipping wheels a visited
+#    pose is a few degrees off, so `python -m husky_course train memory --sensing realistic` stops
+#    with an error that says so. What would you change to train it with slipping wheels? (The oracle
+#    above plans from its true position with the heading set to 0: what does that cost it?)

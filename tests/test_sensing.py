@@ -220,3 +220,26 @@ def test_the_cli_and_the_env_take_the_sensing():
     assert info["sensing"] == "realistic" and not np.array_equal(obs_ideal, obs_real)
     assert world_flag(with_sensing(get_profile("quick"), "realistic").sim) == " --sensing realistic"
     assert world_flag(with_sensing(get_profile("quick"), REALISTIC.scaled(2)).sim) == ""
+
+
+def test_play_is_the_library_and_apply_the_wheels():
+    ideal, real = FastSimulator(SimConfig()), FastSimulator(replace(SimConfig(), sensing=REALISTIC))
+    for sim in (ideal, real):
+        world = sim.load(9)
+        nominal = sim.play(world.start, 17, 0)
+        assert np.array_equal(nominal.path, sim.library.path_from(world.start, 17))
+    world = ideal.load(9)
+    assert np.array_equal(ideal.apply(world.start, 17, 0).path, ideal.play(world.start, 17, 0).path)
+    world = real.load(9)
+    assert not np.array_equal(real.apply(world.start, 17, 0).path, real.play(world.start, 17, 0).path)
+
+
+def test_the_oracle_replans_under_slipping_wheels():
+    """It plans from its true position (heading set to the library's 0) at every step; before, its
+    replay of the plan through the slipping wheels could fail, and a heading off 0 stopped the lattice."""
+    from husky_course.evaluation.episodes import evaluate
+    from husky_course.planners.registry import make_planner
+
+    sim = FastSimulator(replace(SimConfig(), sensing=REALISTIC))
+    result = evaluate(make_planner("oracle"), 20, 3, sim=sim, progress=False)
+    assert result.mean_prims > 8 and result.success_rate >= 0.75, result.to_json()

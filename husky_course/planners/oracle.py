@@ -96,7 +96,7 @@ class OraclePlanner(Planner):
             self.plan.append(m)
             if not feasible[k][row, m]:
                 return None  # the planned collision of a world that cannot be crossed
-            result = self._sim.apply(self.plan_poses[-1], m, self._time + k)
+            result = self._sim.play(self.plan_poses[-1], m, self._time + k)  # the library's path: its plan
             if result.collided:
                 return k, row, m
             self.plan_poses.append(result.pose)
@@ -113,7 +113,12 @@ class OraclePlanner(Planner):
         if off_plan:  # driven elsewhere, or past the horizon: plan again from here
             if pose is None:
                 raise RuntimeError("the oracle needs the true pose to plan again")
-            self._solve(np.asarray(pose, float), self.horizon or self._sim.config.max_primitives)
+            # from the true position; the lattice's headings are the library's (0 between primitives), so
+            # under slipping wheels (chapter 11) the heading's error of a few degrees is left out
+            here = np.asarray(pose, float).copy()
+            if not self._sim.config.sensing.wheels_ideal:
+                here[2] = 0.0
+            self._solve(here, self.horizon or self._sim.config.max_primitives)
             self._step = 0
         self.last_scores = self._action_scores[self._step]
         action = self.plan[self._step]

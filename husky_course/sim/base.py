@@ -99,15 +99,24 @@ class Simulator:
         """Release backend resources (safe to call twice)."""
 
     # --- shared logic --------------------------------------------------------------------------
-    def apply(self, pose: np.ndarray, index: int, t: float = 0.0) -> StepResult:
-        """Play primitive ``index`` back from ``pose``, starting at time ``t``, against the loaded world
-        (the path the wheels execute: the library's under ideal sensing, :mod:`husky_course.sim.sensing`)."""
-        world = self._require_world()
-        path = executed_path(self.library, pose, index, self.config.sensing, world.seed, t)
+    def play(self, pose: np.ndarray, index: int, t: float = 0.0) -> StepResult:
+        """Play primitive ``index`` back from ``pose`` exactly as the library says (the nominal path,
+        whatever the wheels do): what a planner that trusts the library predicts. Under ideal wheels
+        it is :meth:`apply`."""
+        self._require_world()
+        return self._outcome(self.library.path_from(pose, index), t)
+
+    def _outcome(self, path: np.ndarray, t: float) -> StepResult:
         hit = self.contact_along(path, t)
         if hit < 0:
             return StepResult(False, path[-1].copy(), path)
         return StepResult(True, path[max(hit - 1, 0)].copy(), path)
+
+    def apply(self, pose: np.ndarray, index: int, t: float = 0.0) -> StepResult:
+        """Play primitive ``index`` back from ``pose``, starting at time ``t``, against the loaded world
+        (the path the wheels execute: the library's under ideal sensing, :mod:`husky_course.sim.sensing`)."""
+        world = self._require_world()
+        return self._outcome(executed_path(self.library, pose, index, self.config.sensing, world.seed, t), t)
 
     def __enter__(self) -> Simulator:
         return self

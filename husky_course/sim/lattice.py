@@ -146,7 +146,9 @@ def expand_with(
     """
     pose = np.asarray(pose, float)
     if abs(pose[2]) >= 1e-9:
-        raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]}")
+        raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]} (slipping "
+                           "wheels, --sensing realistic, leave headings off the library's: teachers and "
+                           "labels that search the lattice from visited poses need ideal wheels)")
     adv, h = lattice_step(library)
     local, offsets, n = library.local_paths, library.offsets, library.n
     states = [np.array([0])]
