@@ -98,6 +98,23 @@ sim_ideal.load(world_seed)
 display(HTML(animation.figure_player(noise_figure, [{"level": lv} for lv in senses.LEVELS])))
 
 # %% [markdown]
+# What the tests hold the model to, on this view: the same seed and step give the same bytes, each
+# step draws anew, and the wheels' draw for one primitive (its executed length against the
+# library's, and its heading error at the end).
+
+# %%
+# NBVAL_CHECK_OUTPUT
+check = FastSimulator(real.sim)
+start = check.load(world_seed).start
+first = check.depth(start[None], 0)
+print("same seed and step, same bytes:", np.array_equal(first, check.depth(start[None], 0)))
+print("another step, another draw:", not np.array_equal(first, check.depth(start[None], 1)))
+nominal, executed = check.play(start, 20, 0), check.apply(start, 20, 0)
+length = [np.hypot(*np.diff(r.path[:, :2], axis=0).T).sum() for r in (nominal, executed)]
+turn = np.degrees(executed.path[-1, 2] - nominal.path[-1, 2])
+print(f"primitive 20 from the start: executed length x{length[1] / length[0]:.3f}, heading {turn:+.2f} deg")
+
+# %% [markdown]
 # ## Checking the model from repeated views
 #
 # A static world does not change from one step to the next, but the camera's noise is drawn anew at
