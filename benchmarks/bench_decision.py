@@ -6,10 +6,12 @@ Run: ``python benchmarks/bench_decision.py [--profile quick] [--look-ahead 3] [-
 Times one decision of ``lookahead`` (25 primitives, ``look_ahead`` = 3) with the library's batched
 implementation and with the line-by-line reference (one decoder and encoder call per primitive),
 for both readings of the reward line, and prints milliseconds and the speed-up. Then times one
-decision of the distilled planner, the mapping planner and the memory student, side by side, along
-a real episode's images (the memory planners' maps grow as they go), on ``--episodes`` worlds of the
-tuning set (evaluation set ``EvalPlan.tuning_seed``). Uses trained checkpoints if
-the profile has them, otherwise seeded untrained models (same cost).
+decision of the distilled planner, the memory student, the mapping planner and the disc planner, side
+by side, along a real episode's images (the memory planners' maps grow as they go), on
+``--episodes`` worlds of the tuning set (evaluation set ``EvalPlan.tuning_seed``). Uses trained
+checkpoints if the profile has them, otherwise seeded untrained models (same cost; the disc planner
+is left out without its trained network). Last, the mapping planner's search two ways at every
+decision of those episodes: its path tables against the clearance grid read at 21 samples per edge.
 """
 
 from __future__ import annotations
@@ -63,10 +65,12 @@ def main() -> None:
             f"   speed-up {slow / fast:5.1f}x"
         )
     decisions(get_profile(args.profile), args.episodes)
+    searches(get_profile(args.profile), args.episodes)
 
 
 def decisions(profile, episodes: int = 20) -> None:
-    """ms per decision of the distilled, mapping and memory planners along ``episodes`` tuning episodes."""
+    """ms per decision of the distilled, memory, mapping and disc planners along ``episodes`` tuning
+    episodes."""
     from husky_course.evaluation.episodes import eval_world_seeds, run_episode
     from husky_course.models.safety import SurvivalNet
     from husky_course.planners.learned import DistilledPlanner
@@ -84,6 +88,10 @@ def decisions(profile, episodes: int = 20) -> None:
             net = SurvivalNet() if name == "distilled" else new_memory_net(profile)
             planners[name] = DistilledPlanner(net) if name == "distilled" else MemoryPlanner(net, profile.sim)
     planners["mapping"] = make_planner("mapping", config=profile.sim)
+    try:  # the disc planner's network is only trained, never replaced by an untrained one
+        planners["discs"] = make_planner("discs", profile=profile)
+    except Exception as exc:  # noqa: BLE001
+        print(f"(no disc planner: {exc})")
     sim = FastSimulator(profile.sim)
     seed = profile.eval.tuning_seed
     print(f"one decision, single thread, over {episodes} episodes of evaluation set {seed} (tuning):")
@@ -92,6 +100,37 @@ def decisions(profile, episodes: int = 20) -> None:
         times = [t for s in seeds for t in run_episode(planner, sim, int(s)).decision_times]
         mean, worst = 1e3 * float(np.mean(times)), 1e3 * float(np.max(times))
         print(f"  {name:10s} {mean:7.2f} ms mean   {worst:7.2f} ms max")
+
+
+def searches(profile, episodes: int = 20) -> None:
+    """The mapping planner's search on its own maps along ``episodes`` tuning episodes, two ways side by
+    side at every decision: its path tables (every sample of every edge) against the clearance grid
+    read at 21 samples of every edge (the tracker's reading, and the static planners' before)."""
+    import time
+
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.mapping import MappingPlanner
+    from husky_course.sim.fast import FastSimulator
+    from husky_course.sim.lattice import expand_with
+
+    times: list[tuple[float, float]] = []
+
+    class BothSearches(MappingPlanner):
+        def _search(self, horizon: int):  # noqa: ANN202
+            every = max(1, (self._library.local_paths.shape[1] - 1) // (self.path_samples - 1))
+            t0 = time.perf_counter()
+            lattice = super()._search(horizon)
+            t1 = time.perf_counter()
+            expand_with(self._edge_check(horizon), self._library, np.zeros(3), horizon, every=every)
+            times.append((t1 - t0, time.perf_counter() - t1))
+            return lattice
+
+    sim, planner = FastSimulator(profile.sim), BothSearches(profile.sim)
+    for s in eval_world_seeds(episodes, profile.eval.tuning_seed):
+        run_episode(planner, sim, int(s))
+    table, grid = (1e3 * float(np.mean(t)) for t in zip(*times, strict=True))
+    print(f"the mapping planner's search, {len(times)} decisions: path tables {table:.2f} ms, "
+          f"clearance grid {grid:.2f} ms: {grid / table:.1f}x")
 
 
 if __name__ == "__main__":

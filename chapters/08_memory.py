@@ -298,7 +298,8 @@ verdict = (f"The disc planner crosses {disc.success_rate:.1%} of the reporting w
            f"{won} and the mapping planner {lost} (two-sided sign test: p = {p_value:.2g}). ")
 verdict += (f"Its collision rate is at most {disc.collision_rate_upper95:.1%} with 95% confidence, at "
             f"{disc.ms_per_decision:.1f} ms per decision (the mapping planner: {mapping.ms_per_decision:.1f} ms; "
-            "both are dominated by the exact search, not by the network).")
+            f"{profile.eval.workers} evaluation processes side by side; "
+            "`benchmarks/bench_decision.py` times one decision on one thread).")
 display(Markdown(verdict))
 
 # %% [markdown]

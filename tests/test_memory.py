@@ -13,10 +13,11 @@ from husky_course.data import store
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate, run_episode
 from husky_course.imitation import dagger
 from husky_course.planners.base import EpisodeStart
-from husky_course.planners.mapping import ClearanceGrid, MappingPlanner
+from husky_course.planners.mapping import TABLE_RADIUS, ClearanceGrid, MappingPlanner, path_table
 from husky_course.planners.perception import DepthScan, EgoMap
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
+from husky_course.sim.primitives import make_library
 from husky_course.training.memory import load_memory
 from husky_course.training.trainer import CheckpointError
 
@@ -59,6 +60,60 @@ def test_clearance_grid_matches_brute_force():
     x, y = rng.uniform(-0.5, 4.5, 500), rng.uniform(-2.5, 2.5, 500)
     want = np.minimum((np.hypot(x[:, None] - pts[:, 0], y[:, None] - pts[:, 1]) - pts[:, 2]).min(1), 0.8)
     assert np.abs(grid(x, y) - want).max() <= 0.025  # within a cell diagonal
+
+
+def _path_clearance(lib, pts: np.ndarray, x0: float, y0: np.ndarray, reach: float) -> np.ndarray:
+    """Brute force: each start's and primitive's nearest point disc over all of the path's samples."""
+    xy = lib.local_paths[:, :, :2]  # (n, S, 2)
+    dx = x0 + xy[None, :, :, None, 0] - pts[None, None, None, :, 0]
+    dy = y0[:, None, None, None] + xy[None, :, :, None, 1] - pts[None, None, None, :, 1]
+    gap = (np.hypot(dx, dy) - pts[:, 2]).min((2, 3))  # (starts, n)
+    return np.minimum(gap, reach)
+
+
+def test_path_table_matches_brute_force():
+    """The search's clearance of a whole primitive path from map points, read off the path table, is
+    the brute-force distance over every sample within half a cell's diagonal; points off the table
+    (further than its margin from every path) change nothing; a wider point gets a wider table."""
+    lib, rng, reach, res = make_library(), np.random.default_rng(0), 0.77, 0.025
+    table = path_table(lib, res, reach + TABLE_RADIUS)
+    assert table.margin >= reach + TABLE_RADIUS
+    pts = np.c_[rng.uniform(-1, 6, 40), rng.uniform(-3, 3, 40), rng.uniform(0, 0.3, 40)]
+    for x0 in (0.0, 1.0, 3.0):
+        y0 = rng.uniform(-2, 2, 7)
+        got = table.clearance(pts, x0, y0, reach)
+        want = _path_clearance(lib, pts, x0, y0, reach)
+        assert got.shape == (7, lib.n) and (want < reach).any()
+        assert np.abs(got - want).max() <= res / np.sqrt(2) + 1e-9
+    far = np.array([[0.5, table.y0 - 3.0, 0.1], [table.x0 - 3.0, 0.0, 0.1]])  # off the table
+    assert (table.clearance(far, 0.0, np.zeros(3), reach) == reach).all()
+    r = reach + TABLE_RADIUS + 0.5  # a point wider than the first table covers, off it
+    wide = np.array([[0.5, 1.0 + 0.8 + reach + TABLE_RADIUS, r]])
+    assert path_table(lib, res, reach + wide[0, 2]).margin >= reach + wide[0, 2]
+    got = path_table(lib, res, reach + wide[0, 2]).clearance(wide, 0.0, np.zeros(1), reach)
+    want = _path_clearance(lib, wide, 0.0, np.zeros(1), reach)
+    assert (want < reach).any() and np.abs(got - want).max() <= res / np.sqrt(2) + 1e-9
+
+
+def test_mapping_search_matches_the_sample_search():
+    """The mapping planner's search (path tables, every sample) and the clearance-grid search over its
+    own 21 samples judge the same edges of real maps alike, up to the two readings' rounding and
+    the samples the grid search skips."""
+    sim, planner = FastSimulator(), MappingPlanner()
+    every = (sim.library.local_paths.shape[1] - 1) // (planner.path_samples - 1)
+    local, y0 = sim.library.local_paths[:, ::every], np.linspace(-2.0, 2.0, 9)
+    worst, compared = 0.0, 0
+    for seed in eval_world_seeds(6, seed=1):
+        world = sim.load(int(seed))
+        planner.reset(EpisodeStart(library=sim.library, max_primitives=10, key=0))
+        planner.map.add(sim.depth(world.start[None])[0])
+        table, grid = planner._start_check(), planner._edge_check(5)
+        for x0 in (0.0, 1.0, 2.0, 3.0):
+            hit_t, clear_t = table(x0, y0, 0.0)
+            hit_g, clear_g = grid(x0 + local[..., 0], y0[:, None, None] + local[None, :, :, 1], np.zeros(21))
+            worst = max(worst, float(np.abs(clear_t - clear_g).max()))
+            compared += int((clear_g < planner.cap).sum())
+    assert compared > 100 and worst <= 0.05
 
 
 def test_mapping_planner_sees_only_images():

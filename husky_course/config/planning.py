@@ -35,14 +35,16 @@ class MappingConfig:
 
     Chosen on evaluation set 1, the tuning set (200 worlds, full profile): success 0.84 / 0.89 /
     0.905 / 0.905 / 0.905 for horizons 3 / 4 / 5 / 6 / 8, and the margin of 0.02 m over 0.05 and
-    0.08. ``resolution`` and ``path_samples`` fix the clearance grid and how many samples of an
-    edge it judges (not tuned: the grid's rounding is covered by the margin).
+    0.08. ``resolution`` fixes the cells of the path tables the search reads; ``path_samples``, how
+    many samples of an edge the tracker judges against its walking points (neither tuned: their
+    rounding is covered by the margin; the path tables at 0.0125 m crossed 0.951 of 3,000 tuning
+    worlds with the disc planner, as at 0.025 m).
     """
 
     horizon: int = 5
     margin: float = 0.02  #: m of clearance an edge must keep beyond contact
-    resolution: float = 0.025  #: m per cell of the clearance grid
-    path_samples: int = 21  #: samples of each primitive's path the search judges
+    resolution: float = 0.025  #: m per cell of the path tables
+    path_samples: int = 21  #: samples of each edge judged against walking points
 
 
 @dataclass(frozen=True)

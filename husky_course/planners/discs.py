@@ -30,7 +30,9 @@ tracker's does. Tracking the network's centres instead of the tracker's fitted c
 accurate: a median lateral error of 1 cm against 3 cm on 150 unseen worlds) changed nothing
 measurable (0.727 against 0.737 without arrivals): the first sights, not the tracks, are the limit.
 
-Settings, chosen on 1,000 tuning worlds (full profile; ``exp_static_ladder.py --sweep``): the
+Settings, chosen on 1,000 tuning worlds (full profile; ``exp_static_ladder.py --sweep``; measured
+with the search's former clearance grid, which crossed the same 0.951 of 3,000 tuning worlds as
+the path tables that replaced it, :mod:`~husky_course.planners.mapping`): the
 search's margin 0 (0.02, the mapping planner's, cost about a point); no growth of the predicted
 radii; unexplained points beyond 0.05 m (0.03 / 0.05 / 0.1 / 0.2 / never: 0.946 / 0.948 / 0.947 /
 0.943 / 0.937); the mapping planner's horizon 5 (4: 0.939, 6: 0.948). Twice the training views
@@ -126,9 +128,10 @@ class PieceReader:
         for end, side in ((c_lo, -1), (c_hi, 1)):  # the column beside each end
             nb = end + side
             inside = (nb >= 0) & (nb < cam.size)
-            beside = d[np.clip(nb, 0, cam.size - 1)]
+            beside = d[np.minimum(np.maximum(nb, 0), cam.size - 1)]
             seen = inside & np.isfinite(beside)
-            step = np.where(seen, np.clip((np.where(seen, beside, 0.0) - d[end]) / cam.far, -1, 1), 0.0)
+            gap = (np.where(seen, beside, 0.0) - d[end]) / cam.far
+            step = np.where(seen, np.minimum(np.maximum(gap, -1.0), 1.0), 0.0)
             glob += [(inside & ~seen).astype(float), step]
         assert len(glob) == PIECE_GLOBALS
         feats = np.concatenate([res.reshape(len(pieces), -1), np.stack(glob, axis=1)], axis=1)
@@ -214,11 +217,13 @@ class DiscMap:
         logit, offset, radius = self.forward(feats)
         centres = frames_a[:, 0] + offset[:, :1] * frames_a[:, 1] + offset[:, 1:] * frames_a[:, 2]
         cyl = logit > 0
+        # a wall's columns, and the points a cylinder's disc leaves unexplained, stay scan points
+        sel = np.concatenate(pieces)
+        owner = np.repeat(np.arange(len(pieces)), [len(i) for i in pieces])
+        rel = pts[sel] - centres[owner]
+        off = np.hypot(rel[:, 0], rel[:, 1]) - radius[owner]
         other = np.zeros(len(d), bool)
-        for k, i in enumerate(pieces):
-            # a wall's columns, and the points a cylinder's disc leaves unexplained, stay scan points
-            off = np.hypot(*(pts[i] - centres[k]).T) - radius[k]
-            other[cols[i]] = ~cyl[k] | (np.abs(off) > self.unexplained)
+        other[cols[sel]] = ~cyl[owner] | (np.abs(off) > self.unexplained)
         return np.c_[centres, radius], cyl, other
 
     def add(self, obs: np.ndarray) -> None:
@@ -238,7 +243,7 @@ class DiscMap:
                 col = (reader.half - y / dx) * cam.size / (2 * reader.half)
             j = np.floor(np.where(dx > cam.near, col, -1.0) + 0.5).astype(int)
             in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
-            seen_again = in_view & (dx - r < d[np.clip(j, 0, cam.size - 1)] + 0.05)
+            seen_again = in_view & (dx - r < d[np.minimum(np.maximum(j, 0), cam.size - 1)] + 0.05)
             if len(new):
                 gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])
                 seen_again |= (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
@@ -349,7 +354,7 @@ class DiscTrackingPlanner(DiscPlanner):
     is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
 
     name = "discs"
-    _edge_check = TrackingPlanner._edge_check
+    _start_check = TrackingPlanner._start_check
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,

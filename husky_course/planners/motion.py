@@ -62,13 +62,12 @@ def split_arcs(x: np.ndarray, a: int, b: int, prominence: float = 0.03) -> list[
     course (``x`` rising or falling across the columns) has no such peak and stays whole.
     """
     xs = x[a:b]
-    cuts = []
-    for i in range(1, len(xs) - 1):
-        if xs[i] > xs[i - 1] and xs[i] >= xs[i + 1] and min(
-            xs[i] - xs[: i + 1].min(), xs[i] - xs[i:].min()
-        ) > prominence:
-            cuts.append(a + i + 1)
-    edges = [a, *cuts, b]
+    before = np.minimum.accumulate(xs)  # xs[: i + 1].min()
+    after = np.minimum.accumulate(xs[::-1])[::-1]  # xs[i:].min()
+    mid = xs[1:-1]
+    prominent = np.minimum(mid - before[1:-1], mid - after[1:-1]) > prominence
+    peak = (mid > xs[:-2]) & (mid >= xs[2:]) & prominent
+    edges = [a, *(a + 2 + np.flatnonzero(peak)).tolist(), b]
     return [np.arange(lo, hi) for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
 
 

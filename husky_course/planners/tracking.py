@@ -15,8 +15,8 @@ student (chapter 10), reading the same two things the student's memory gives it.
   every step a remembered point moves by it (dead reckoning of the robot *and* of the obstacle),
   and a point seen again is replaced by the new scan's.
 * **Space-time search.** The oracle's lattice search over the map: a standing point is judged on
-  the mapping planner's clearance grid, a walking point exactly, where it is at each sample's time
-  (level ``k`` of the lattice is the step from ``k`` to ``k + 1`` steps after now).
+  the mapping planner's path tables, a walking point exactly, where it is at each of 21 samples'
+  times (level ``k`` of the lattice is the step from ``k`` to ``k + 1`` steps after now).
 
 On the static course every velocity is 0 and it is the mapping planner. Its ``horizon`` is the
 mapping planner's, 5, which keeps that equivalence; on evaluation set 1, the tuning set, it is
@@ -35,8 +35,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import ArrivalsConfig, MappingConfig, SimConfig
-from ..sim.lattice import EdgeCheck
-from .mapping import MappingPlanner
+from ..sim.lattice import StartCheck
+from ..sim.world import sample_times
+from .mapping import MappingPlanner, path_table
 from .motion import WalkingMap
 
 
@@ -63,31 +64,46 @@ class TrackingPlanner(MappingPlanner):
         """Per map point: a first sight the arrivals rule left standing (it may yet walk either way)."""
         return self.map.fresh & (self.map.velocity == 0)
 
-    def _edge_check(self, horizon: int) -> EdgeCheck:
-        """Standing points on the mapping planner's clearance grid; each walking point exactly, where
-        it is at every sample's time. With ``doubt_steps``, each doubtful point (:attr:`doubtful`)
-        also stands for the band it could have walked to by a sample's time (up to ``doubt_steps``
-        steps, at the course's fastest walk): the band counts in the clearance a plan is ranked by,
-        and with ``doubt_hard`` an edge that enters it is infeasible."""
+    def _start_check(self) -> StartCheck:
+        """Standing points read off the path tables as the mapping planner reads them; each walking
+        point exactly, where it is at the time of each of every ``path_samples``-th sample of an
+        edge. With ``doubt_steps``, each doubtful point (:attr:`doubtful`) also stands for the band
+        it could have walked to by a sample's time (up to ``doubt_steps`` steps, at the course's
+        fastest walk): the band counts in the clearance a plan is ranked by, and with
+        ``doubt_hard`` an edge that enters it is infeasible. With nothing walking or doubtful this
+        is the mapping planner's check, number for number."""
         walking = self.velocity != 0
-        reach = self.radius + self.margin + self.cap
-        grid = self._grid(self.points[~walking], horizon)
-        movers, speeds = self.points[walking], self.velocity[walking]
-        doubt = self.points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
+        points, reach = self.points, self._reach
+        standing = points[~walking]
+        table = self._table
+        if table is None or reach + float(standing[:, 2].max(initial=0.0)) > table.margin:
+            table = path_table(self._library, self.resolution, reach + float(standing[:, 2].max(initial=0.0)),
+                               self._digest)
+        movers, speeds = points[walking], self.velocity[walking]
+        doubt = points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
+        local = self._library.local_paths  # type: ignore[union-attr]
+        every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
+        x, t = local[:, ::every, 0], sample_times(0.0, local.shape[1])[::every]  # relative to an edge's start
+        ahead = (x.min() - reach, x.max() + reach)
 
-        def check(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            gap = grid(x, y)
-            near = np.flatnonzero((movers[:, 0] > x.min() - reach) & (movers[:, 0] < x.max() + reach))
-            for (px, py, r), v in zip(movers[near], speeds[near], strict=True):  # where it is at each sample
-                np.minimum(gap, np.hypot(x - px, y - (py + v * t)) - r, out=gap)
-            clear = gap.min(-1) - self.radius
-            near = np.flatnonzero((doubt[:, 0] > x.min() - reach) & (doubt[:, 0] < x.max() + reach))
-            if not len(near):
+        def near(p: np.ndarray, x0: float) -> np.ndarray:
+            return p[(p[:, 0] > x0 + ahead[0]) & (p[:, 0] < x0 + ahead[1])]
+
+        def check(x0: float, y0: np.ndarray, t0: float) -> tuple[np.ndarray, np.ndarray]:
+            gap = table.clearance(standing, x0, y0, reach)  # (states, n), capped at reach
+            moving, doubted = near(np.c_[movers, speeds], x0), near(doubt, x0)
+            if len(moving) or len(doubted):
+                X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
+            for px, py, r, v in moving:  # where it is at each sample's time
+                np.minimum(gap, (np.hypot(X - px, Y - (py + v * T)) - r).min(-1), out=gap)
+            clear = gap - self.radius
+            if not len(doubted):
                 return clear < self.margin, clear - self.margin
-            band = self.max_walk * np.minimum(t, self.doubt_steps)
-            for px, py, r in doubt[near]:  # the nearest place it could be, standing or walking
-                np.minimum(gap, np.hypot(x - px, np.maximum(0.0, np.abs(y - py) - band)) - r, out=gap)
-            doubted = gap.min(-1) - self.radius
-            return (doubted if self.doubt_hard else clear) < self.margin, doubted - self.margin
+            band = self.max_walk * np.minimum(T, self.doubt_steps)
+            for px, py, r in doubted:  # the nearest place it could be, standing or walking
+                off = np.maximum(0.0, np.abs(Y - py) - band)
+                np.minimum(gap, (np.hypot(X - px, off) - r).min(-1), out=gap)
+            wide = gap - self.radius
+            return (wide if self.doubt_hard else clear) < self.margin, wide - self.margin
 
         return check

@@ -144,26 +144,56 @@ def expand_with(
     geometry (:func:`disc_check`), the mapping planner with its map. ``check`` sees every
     ``every``-th sample of each edge (the mapping planners judge 21 of the 101).
     """
+    local = library.local_paths
+
+    def judge(k: int, x0: float, y0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        X = x0 + local[:, ::every, 0]  # (n, S)
+        Y = y0[:, None, None] + local[None, :, ::every, 1]  # (nJ, n, S)
+        return check(X, Y, sample_times(t0 + k, local.shape[1])[::every])
+
+    return _expand(judge, library, pose, horizon)
+
+
+#: ``check(x0, y0, t0) -> (hit, clear)``: every edge of one lattice level judged from its states'
+#: start positions, ``x0`` (the same for every state) and ``y0 (states,)``, at time ``t0``; both
+#: outputs ``(states, n)`` as an :data:`EdgeCheck`'s (for checks that know each primitive's path)
+StartCheck = Callable[[float, np.ndarray, float], tuple[np.ndarray, np.ndarray]]
+
+
+def expand_from_starts(
+    check: StartCheck, library: PrimitiveLibrary, pose: np.ndarray, horizon: int, t0: float = 0.0
+) -> Lattice:
+    """:func:`expand_with` for a :data:`StartCheck` (the static mapping planners' path tables)."""
+    return _expand(lambda k, x0, y0: check(x0, y0, t0 + k), library, pose, horizon)
+
+
+def _expand(
+    judge: Callable[[int, float, np.ndarray], tuple[np.ndarray, np.ndarray]], library: PrimitiveLibrary,
+    pose: np.ndarray, horizon: int,
+) -> Lattice:
+    """The search's loop: ``judge(k, x0, y0)`` gives level ``k``'s edges' ``(hit, clear)``."""
     pose = np.asarray(pose, float)
     if abs(pose[2]) >= 1e-9:
         raise LatticeError(f"the lattice search needs a start heading of 0, got yaw {pose[2]} (slipping "
                            "wheels, --sensing realistic, leave headings off the library's: teachers and "
                            "labels that search the lattice from visited poses need ideal wheels)")
     adv, h = lattice_step(library)
-    local, offsets, n = library.local_paths, library.offsets, library.n
+    offsets, n = library.offsets, library.n
     states = [np.array([0])]
     feasible, clear, nxt = [], [], []
     for k in range(horizon):
         J = states[k]
-        y0 = pose[1] + k * offsets[0] + J * h
-        X = pose[0] + k * adv + local[:, ::every, 0]  # (n, S)
-        Y = y0[:, None, None] + local[None, :, ::every, 1]  # (nJ, n, S)
-        hit, c = check(X, Y, sample_times(t0 + k, local.shape[1])[::every])
+        hit, c = judge(k, pose[0] + k * adv, pose[1] + k * offsets[0] + J * h)
         feasible.append(~hit)
         clear.append(c)
         targets = J[:, None] + np.arange(n)[None]
-        states.append(np.unique(targets[~hit]) if (~hit).any() else np.array([], int))
-        nxt.append(np.searchsorted(states[k + 1], targets).clip(0, max(len(states[k + 1]) - 1, 0)))
+        # the states reached (sorted, distinct: np.unique) and each target's place among them
+        # (np.searchsorted), read off a table over the few lateral indices a depth can hold
+        reached = np.zeros(int(targets.max(initial=0)) + 2, bool)
+        reached[targets[~hit]] = True
+        states.append(np.flatnonzero(reached))
+        before = np.cumsum(reached) - reached  # states below each index
+        nxt.append(np.minimum(before[targets], max(len(states[k + 1]) - 1, 0)))  # before >= 0
     return Lattice(pose, states, feasible, clear, nxt)
 
 
@@ -221,7 +251,7 @@ def rank_plans(lattice: Lattice, lateral_cost: np.ndarray, cap: float, quantum: 
     keys: list[np.ndarray] = [np.empty(0)] * horizon
     for k in range(horizon - 1, -1, -1):
         f, idx, clear = lattice.feasible[k], lattice.nxt[k], lattice.clear[k]
-        cq = np.floor(np.clip(clear, 0.0, cap) / quantum)
+        cq = np.floor(np.minimum(np.maximum(clear, 0.0), cap) / quantum)  # np.clip, without its overhead
         if len(steps):
             s_e, b_e, c_e = 1 + steps[idx], np.minimum(cq, bott[idx]), lateral_cost[None] + cost[idx]
         else:
