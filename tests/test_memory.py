@@ -116,6 +116,19 @@ def test_mapping_search_matches_the_sample_search():
     assert compared > 100 and worst <= 0.05
 
 
+def test_a_pickled_mapping_planner_leaves_its_path_table_behind():
+    """Workers get the planner pickled: without its table (megabytes), which reset finds again."""
+    import pickle
+
+    sim, planner = FastSimulator(), MappingPlanner()
+    planner.reset(EpisodeStart(library=sim.library, max_primitives=10, key=0))
+    assert planner._table is not None and planner._table.rows.nbytes > 1e6
+    copy = pickle.loads(pickle.dumps(planner))
+    assert len(pickle.dumps(planner)) < 1e6 and copy._table is None
+    copy.reset(EpisodeStart(library=sim.library, max_primitives=10, key=0))
+    assert copy._table is planner._table  # the process's cache
+
+
 def test_mapping_planner_sees_only_images():
     planner = make_planner("mapping")
     assert not planner.privileged

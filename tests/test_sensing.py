@@ -243,3 +243,18 @@ def test_the_oracle_replans_under_slipping_wheels():
     sim = FastSimulator(replace(SimConfig(), sensing=REALISTIC))
     result = evaluate(make_planner("oracle"), 20, 3, sim=sim, progress=False)
     assert result.mean_prims > 8 and result.success_rate >= 0.75, result.to_json()
+
+
+@pytest.mark.parametrize(
+    "name, world", [("seen-so-far", "static"), ("snapshot", "moving"), ("seen-motion", "moving")]
+)
+def test_privileged_references_search_from_their_true_position_under_slip(name, world):
+    """The references that search the lattice from the true pose set its heading to the library's 0 under
+    slipping wheels, as the oracle does (the lattice refused a heading off 0)."""
+    from husky_course.config import get_profile, with_sensing, with_world
+    from husky_course.evaluation.episodes import evaluate
+    from husky_course.planners.registry import make_planner
+
+    profile = with_sensing(with_world(get_profile("quick"), world), "realistic")
+    result = evaluate(make_planner(name), 6, 3, sim=FastSimulator(profile.sim), progress=False)
+    assert result.mean_prims > 5, result.to_json()

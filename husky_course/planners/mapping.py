@@ -207,6 +207,10 @@ class MappingPlanner(Planner):
         self._table: PathTable | None = None
         self._remaining = 0
 
+    def __getstate__(self) -> dict:
+        """Pickled without its path table (megabytes, rebuilt from the process's cache at reset)."""
+        return {**self.__dict__, "_table": None}
+
     @property
     def _reach(self) -> float:
         """The distance (m) from a point beyond which the search tells no clearances apart."""

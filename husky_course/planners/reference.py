@@ -69,10 +69,19 @@ class _Reference(Planner):
         self.last_scores = -(keys - keys.max()) / 1e6
         return int(ranking.choice[0][0])
 
+    def _here(self, pose: np.ndarray) -> np.ndarray:
+        """Where the search starts: the true pose, its heading set to the library's 0 under slipping
+        wheels (chapter 11: a few degrees the lattice leaves out, as the oracle does)."""
+        assert self._sim is not None
+        here = np.asarray(pose, float).copy()
+        if not self._sim.config.sensing.wheels_ideal:
+            here[2] = 0.0
+        return here
+
     def _choose_frozen(self, check, pose: np.ndarray) -> int:
         """:meth:`_choose` on the lattice of the remaining steps under a frozen (time-free) ``check``."""
         assert self._sim is not None
-        lattice = expand_with(check, self._sim.library, np.asarray(pose, float), max(self._remaining, 1))
+        lattice = expand_with(check, self._sim.library, self._here(pose), max(self._remaining, 1))
         return self._choose(lattice)
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
@@ -80,43 +89,9 @@ class _Reference(Planner):
         self._remaining -= 1
 
 
-class SeenObstaclesPlanner(_Reference):
-    """Exact replanning over the obstacles seen now (or ever): perfect perception, no more."""
-
-    def __init__(self, memory: bool, oracle: OracleConfig | None = None) -> None:
-        super().__init__(oracle)
-        self.memory = bool(memory)
-        self.name = "seen so far (perfect perception)" if memory else "seen now (perfect perception)"
-        self._eyes: FastSimulator | None = None
-        self._seen: set[int] = set()
-
-    def reset(self, start: EpisodeStart) -> None:
-        super().reset(start)
-        self._eyes = FastSimulator(start.sim.config)
-        self._eyes.load(start.sim.world)
-        self._seen = set()
-
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        assert self._eyes is not None and self._eyes.world is not None and pose is not None
-        world = self._eyes.world
-        now = set(self._eyes.visible_obstacles(pose).tolist())
-        self._seen = (self._seen | now) if self.memory else now
-        obstacles = world.obstacles[sorted(self._seen)] if self._seen else np.empty((0, 3))
-        check = disc_check(obstacles, world.wall_y, world.config.robot_radius, self.oracle.cap)
-        return self._choose_frozen(check, pose)
-
-
-class SeenMotionPlanner(_Reference):
-    """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
-
-    Privileged, an analysis tool: a reference for a camera-based planner on the moving course (not a
-    bound: it takes unseen space, and a first sight's future, as known or free). Every
-    cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
-    from then on; the others are unknown. Against the oracle, it measures what the camera never
-    shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
-    """
-
-    name = "seen so far, with motion (perfect perception)"
+class _Seeing(_Reference):
+    """A reference with eyes of its own: a private simulator of the same world, which tells it which
+    cylinders the camera renders, and the set of those it has seen."""
 
     def __init__(self, oracle: OracleConfig | None = None) -> None:
         super().__init__(oracle)
@@ -129,6 +104,37 @@ class SeenMotionPlanner(_Reference):
         self._eyes.load(start.sim.world)
         self._seen = set()
 
+
+class SeenObstaclesPlanner(_Seeing):
+    """Exact replanning over the obstacles seen now (or ever): perfect perception, no more."""
+
+    def __init__(self, memory: bool, oracle: OracleConfig | None = None) -> None:
+        super().__init__(oracle)
+        self.memory = bool(memory)
+        self.name = "seen so far (perfect perception)" if memory else "seen now (perfect perception)"
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        assert self._eyes is not None and self._eyes.world is not None and pose is not None
+        world = self._eyes.world
+        now = set(self._eyes.visible_obstacles(pose).tolist())
+        self._seen = (self._seen | now) if self.memory else now
+        obstacles = world.obstacles[sorted(self._seen)] if self._seen else np.empty((0, 3))
+        check = disc_check(obstacles, world.wall_y, world.config.robot_radius, self.oracle.cap)
+        return self._choose_frozen(check, pose)
+
+
+class SeenMotionPlanner(_Seeing):
+    """Exact space-time replanning over the cylinders seen so far, with their true motion (chapter 10).
+
+    Privileged, an analysis tool: a reference for a camera-based planner on the moving course (not a
+    bound: it takes unseen space, and a first sight's future, as known or free). Every
+    cylinder any image so far has rendered (at its time) is known exactly, position *and* velocity,
+    from then on; the others are unknown. Against the oracle, it measures what the camera never
+    shows; against :class:`SnapshotPlanner`, what perceiving motion is worth.
+    """
+
+    name = "seen so far, with motion (perfect perception)"
+
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         assert self._eyes is not None and self._eyes.world is not None and pose is not None
         world = self._eyes.world
@@ -136,7 +142,7 @@ class SeenMotionPlanner(_Reference):
         self._seen |= new
         known = np.array(sorted(self._seen), int)
         sub = self._known_world(world, known, np.isin(known, sorted(new)))
-        steps, pose = max(self._remaining, 1), np.asarray(pose, float)
+        steps, pose = max(self._remaining, 1), self._here(pose)
         return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, self._time))
 
     def _known_world(self, world: World, known: np.ndarray, first: np.ndarray) -> World:
