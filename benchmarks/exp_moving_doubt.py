@@ -5,7 +5,10 @@ Run: ``python benchmarks/exp_moving_doubt.py [--profile full] [--worlds 300] [--
 A cylinder seen once, that the arrivals rule (:mod:`husky_course.planners.arrivals`) could not
 judge, is planned around as standing. Here it also stands for the band it could have walked to by
 each sample's time, at the course's fastest walk, for up to ``doubt_steps`` steps: in the clearance
-a plan is ranked by (soft), or as an obstacle (hard). On the moving course's tuning set (evaluation
+a plan is ranked by (soft), or as an obstacle (hard). Or (hedge) the first primitive is chosen by
+its expected safe steps over three hypotheses for all of them at once: standing, walking left,
+walking right (the course's mean speed), weighted by the course's share of walking cylinders. On
+the moving course's tuning set (evaluation
 set 1 by default), the disc planner and the tracker with each setting side by side on the same
 worlds: success with its exact 95% interval, and the paired count of worlds won only with / only
 without the band. The disc planner needs its network (``python -m husky_course train discs``).
@@ -22,6 +25,7 @@ from husky_course.planners.registry import make_planner
 SETTINGS = {
     "off": {}, "soft 1": {"doubt_steps": 1.0}, "soft 2": {"doubt_steps": 2.0},
     "hard 0.5": {"doubt_steps": 0.5, "doubt_hard": True}, "hard 1": {"doubt_steps": 1.0, "doubt_hard": True},
+    "hedge": {"hedge": True},
 }
 
 

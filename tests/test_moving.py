@@ -330,3 +330,24 @@ def test_tracking_planner_is_mapping_on_static_and_reads_motion_on_moving():
                         progress=False, workers=2)
     mapping = evaluate(make_planner("mapping", config=MOVING.sim), 100, 1, config=MOVING.sim, progress=False)
     assert tracking.success_ci95[0] > mapping.success_ci95[1], (tracking.success_rate, mapping.success_rate)
+
+
+def test_hedged_choice_reads_safe_steps_off_the_ranking_and_stays_off_the_static_course():
+    """The hedge (an experiment, off by default) counts each first primitive's safe steps from the ranking's
+    keys: they agree with :func:`survival` of the same lattice; on the static course (no walking share)
+    the hedged tracker chooses as the plain one, world for world."""
+    from husky_course.planners.tracking import _steps
+    from husky_course.sim.lattice import rank_plans
+
+    sim, varied = FastSimulator(QUICK.sim), False
+    for seed in eval_world_seeds(4, 1):
+        world = sim.load(int(seed))
+        for ahead in range(5):  # further into the course, where some first primitives are doomed
+            lattice = expand(world, sim.library, world.start + (ahead, 0.0, 0.0), 5, 0.3)
+            keys = rank_plans(lattice, np.abs(sim.library.offsets), 0.3, 0.02).keys[0][0]
+            np.testing.assert_array_equal(_steps(keys), survival(lattice))
+            varied |= len(np.unique(survival(lattice))) > 2
+    assert varied
+    plain, hedged = ([run_episode(make_planner("tracking", config=QUICK.sim, hedge=h), sim, int(s)).actions
+                      for s in eval_world_seeds(4, 1)] for h in (False, True))
+    assert plain == hedged

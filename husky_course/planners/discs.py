@@ -54,7 +54,7 @@ from .arrivals import Arrivals
 from .mapping import MappingPlanner
 from .motion import MotionMemory, segments
 from .perception import DepthScan, EgoMap
-from .tracking import TrackingPlanner
+from .tracking import TrackingPlanner, _set_doubt
 
 
 class PieceReader:
@@ -354,17 +354,17 @@ class DiscTrackingPlanner(DiscPlanner):
     is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
 
     name = "discs"
-    _start_check = TrackingPlanner._start_check
+    _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
                  doubt_steps: float = ArrivalsConfig.doubt_steps,
-                 doubt_hard: bool = ArrivalsConfig.doubt_hard, **kwargs: float) -> None:
+                 doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
+                 **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
-        self.doubt_steps, self.doubt_hard = float(doubt_steps), bool(doubt_hard)
-        self.max_walk = float(getattr(self.config.world, "speed_range", (0.0, 0.0))[1])
+        _set_doubt(self, doubt_steps, doubt_hard, hedge)
 
     @property
     def doubtful(self) -> np.ndarray:

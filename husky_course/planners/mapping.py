@@ -288,9 +288,12 @@ class MappingPlanner(Planner):
         if self._library is None:
             raise RuntimeError("call reset(start) before act()")
         self.map.add(obs)
-        horizon = max(1, min(self.horizon, self._remaining))
-        lattice = self._search(horizon)
-        ranking = rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
+        return self._decide(max(1, min(self.horizon, self._remaining)))
+
+    def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
+        """The best first primitive of the map's lattice and every first primitive's rank."""
+        assert self._library is not None
+        ranking = rank_plans(self._search(horizon), np.abs(self._library.offsets), self.cap, self.quantum)
         return int(ranking.choice[0][0]), ranking.keys[0][0]
 
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:

@@ -48,11 +48,11 @@ class TrackingPlanner(MappingPlanner):
 
     def __init__(self, config: SimConfig | None = None, horizon: int = MappingConfig.horizon,
                  arrivals: bool = True, doubt_steps: float = ArrivalsConfig.doubt_steps,
-                 doubt_hard: bool = ArrivalsConfig.doubt_hard, **kwargs: float) -> None:
+                 doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
+                 **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
-        self.doubt_steps, self.doubt_hard = float(doubt_steps), bool(doubt_hard)
-        self.max_walk = float(getattr(self.config.world, "speed_range", (0.0, 0.0))[1])
+        _set_doubt(self, doubt_steps, doubt_hard, hedge)
 
     @property
     def velocity(self) -> np.ndarray:
@@ -72,14 +72,17 @@ class TrackingPlanner(MappingPlanner):
         fastest walk): the band counts in the clearance a plan is ranked by, and with
         ``doubt_hard`` an edge that enters it is infeasible. With nothing walking or doubtful this
         is the mapping planner's check, number for number."""
-        walking = self.velocity != 0
+        speeds = self.velocity
+        if self._doubt_speed:  # a hypothesis of :meth:`_decide`: every doubtful point walks at this speed
+            speeds = np.where(self.doubtful, self._doubt_speed, speeds)
+        walking = speeds != 0
         points, reach = self.points, self._reach
         standing = points[~walking]
         table = self._table
         if table is None or reach + float(standing[:, 2].max(initial=0.0)) > table.margin:
             table = path_table(self._library, self.resolution, reach + float(standing[:, 2].max(initial=0.0)),
                                self._digest)
-        movers, speeds = points[walking], self.velocity[walking]
+        movers, speeds = points[walking], speeds[walking]
         doubt = points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
         local = self._library.local_paths  # type: ignore[union-attr]
         every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
@@ -107,3 +110,36 @@ class TrackingPlanner(MappingPlanner):
             return (wide if self.doubt_hard else clear) < self.margin, wide - self.margin
 
         return check
+
+    def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
+        """The mapping planner's choice; with ``hedge``, the first primitive whose plans survive the most
+        steps in expectation over three hypotheses for the doubtful points (all standing, all
+        walking left, all walking right at the course's mean speed), weighted by the course's share
+        of walking cylinders; ties go to the standing hypothesis's rank."""
+        choice, keys = MappingPlanner._decide(self, horizon)
+        walks = float(getattr(self.config.world, "moving_fraction", 0.0))
+        if not self.hedge or not walks or not self.doubtful.any():
+            return choice, keys
+        lo, hi = self.config.world.speed_range  # type: ignore[attr-defined]
+        expected = (1 - walks) * _steps(keys)
+        for speed in (-(lo + hi) / 2, (lo + hi) / 2):
+            self._doubt_speed = speed
+            try:
+                expected = expected + walks / 2 * _steps(MappingPlanner._decide(self, horizon)[1])
+            finally:
+                self._doubt_speed = 0.0
+        hedged = np.where(keys > -1e8, expected * 1e6 + (keys - _steps(keys) * 1e6), keys)
+        return int(np.argmax(hedged)), hedged
+
+
+def _steps(keys: np.ndarray) -> np.ndarray:
+    """Safe steps of each first primitive's best plan, read off :func:`~husky_course.sim.lattice.rank_plans`'s
+    keys (``steps * 1e6 + clearance bins * 1e3 - lateral cost``; below ``-1e8``: it touches at once)."""
+    return np.where(keys > -1e8, np.floor((keys + 5e5) / 1e6), 0.0)
+
+
+def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool) -> None:
+    """The settings for first sights the arrivals rule leaves standing (:class:`ArrivalsConfig`)."""
+    planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
+    planner.max_walk = float(getattr(planner.config.world, "speed_range", (0.0, 0.0))[1])
+    planner._doubt_speed = 0.0
