@@ -82,7 +82,8 @@ test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train discs --sensing realistic --profile quick --no-progress > /dev/null
-	HUSKY_PROFILE=quick $(PY) -m pytest notebooks tests --nbval-lax --keep-executed -p no:cacheprovider
+	HUSKY_PROFILE=quick $(PY) -m pytest notebooks tests --nbval-lax --keep-executed -p no:cacheprovider \
+		--durations=15
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)
 	$(PY) benchmarks/bench_collection.py
