@@ -72,19 +72,6 @@ def test_memory_student_beats_the_hand_written_heuristic(results):
     assert memory.success_ci95[0] > heuristic.success_ci95[1], (memory.success_ci95, heuristic.success_ci95)
 
 
-def sign_test(b: int, c: int) -> float:
-    """Exact two-sided sign test of ``b`` against ``c`` discordant pairs (a fair coin's chance)."""
-    from math import comb
-
-    k, n = min(b, c), b + c
-    return min(1.0, 2 * sum(comb(n, i) for i in range(k + 1)) / 2**n) if n else 1.0
-
-
-def test_sign_test_known_values():
-    assert sign_test(0, 0) == 1.0 and sign_test(3, 2) == 1.0
-    assert abs(sign_test(25, 5) - 0.000325) < 1e-5 and sign_test(0, 6) == 2 / 64
-
-
 def test_training_with_noise_helps_the_disc_network_under_noise():
     """Chapter 11: the disc network trained on realistic views against the one trained on ideal views.
 
@@ -100,6 +87,7 @@ def test_training_with_noise_helps_the_disc_network_under_noise():
     import numpy as np
     import torch
 
+    from husky_course.course.diagnosis import sign_test
     from husky_course.data.io import load_npz
     from husky_course.imitation.discs import _tensors
     from husky_course.training.discs import disc_dir
@@ -116,9 +104,8 @@ def test_training_with_noise_helps_the_disc_network_under_noise():
     sim = FastSimulator(real.sim)
     noisy = evaluate(trained("discs", real), WORLDS, EVAL_SET, sim=sim, progress=False)
     ideal = evaluate(trained("discs", QUICK), WORLDS, EVAL_SET, sim=sim, progress=False)
-    only_noisy = sum(a.success and not b.success for a, b in zip(noisy.episodes, ideal.episodes, strict=True))
-    only_ideal = sum(b.success and not a.success for a, b in zip(noisy.episodes, ideal.episodes, strict=True))
-    p_value = sign_test(only_noisy, only_ideal)
+    only_noisy, only_ideal, p_value = sign_test([e.success for e in noisy.episodes],
+                                                [e.success for e in ideal.episodes])
     print(f"realistic senses: {noisy.success_rate:.3f} trained with noise, {ideal.success_rate:.3f} without; "
           f"worlds only one crosses {only_noisy} / {only_ideal}, sign test p = {p_value:.3f}")
     assert not (only_ideal > only_noisy and p_value < 0.05), (only_noisy, only_ideal, p_value)

@@ -232,5 +232,7 @@ def test_sign_test_of_paired_outcomes():
     assert sign_test(a, b) == (6, 0, pytest.approx(2 / 2**6))  # six discordant pairs, all one way
     assert sign_test(b, a)[:2] == (0, 6) and sign_test(a, a) == (0, 0, 1.0)
     assert sign_test([1, 0, 1], [0, 1, 1]) == (1, 1, 1.0)
+    assert sign_test([1] * 3 + [0] * 2, [0] * 3 + [1] * 2)[2] == 1.0  # 3 against 2
+    assert abs(sign_test([1] * 25 + [0] * 5, [0] * 25 + [1] * 5)[2] - 0.000325) < 1e-5  # 25 against 5
     with pytest.raises(ValueError, match="equal shapes"):
         sign_test(a, b[:3])

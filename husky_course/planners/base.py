@@ -140,3 +140,13 @@ def survival_scores(s: np.ndarray, smooth: int) -> np.ndarray:
     padded = np.pad(s, smooth, mode="constant", constant_values=0.0)
     neighbourhood = np.convolve(padded, np.ones(k) / k, mode="valid")
     return -(s + 0.5 * neighbourhood)
+
+
+def search_start(pose: np.ndarray, sim: Simulator) -> np.ndarray:
+    """Where a privileged planner's lattice search starts: the true pose, its heading set to the
+    library's 0 under slipping wheels (chapter 11: a few degrees the lattice, whose headings are 0
+    between primitives, leaves out)."""
+    here = np.asarray(pose, float).copy()
+    if not sim.config.sensing.wheels_ideal:
+        here[2] = 0.0
+    return here

@@ -264,14 +264,18 @@ class MappingPlanner(Planner):
 
         return check
 
+    def _table_for(self, points: np.ndarray) -> PathTable:
+        """The path table wide enough for ``points`` ``(m, 3)``: the one built at reset, or a wider one."""
+        needed = self._reach + float(points[:, 2].max(initial=0.0))
+        if self._table is not None and needed <= self._table.margin:
+            return self._table
+        return path_table(self._library, self.resolution, needed, self._digest)
+
     def _start_check(self) -> StartCheck:
         """How the search judges an edge: the clearance of the primitive's whole path from the map's
         points, read off the library's :class:`PathTable` (no time)."""
         points, reach = self.points, self._reach
-        table = self._table
-        if table is None or reach + float(points[:, 2].max(initial=0.0)) > table.margin:
-            table = path_table(self._library, self.resolution, reach + float(points[:, 2].max(initial=0.0)),
-                               self._digest)
+        table = self._table_for(points)
 
         def check(x0: float, y0: np.ndarray, t0: float) -> tuple[np.ndarray, np.ndarray]:
             clear = table.clearance(points, x0, y0, reach) - self.radius

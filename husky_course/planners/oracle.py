@@ -12,7 +12,7 @@ import numpy as np
 from ..config import OracleConfig
 from ..sim.base import Simulator
 from ..sim.lattice import LatticeError, Ranking, expand, rank_plans
-from .base import EpisodeStart, Planner, PlannerError, check_observation
+from .base import EpisodeStart, Planner, PlannerError, check_observation, search_start
 
 
 class OraclePlanner(Planner):
@@ -113,12 +113,7 @@ class OraclePlanner(Planner):
         if off_plan:  # driven elsewhere, or past the horizon: plan again from here
             if pose is None:
                 raise RuntimeError("the oracle needs the true pose to plan again")
-            # from the true position; the lattice's headings are the library's (0 between primitives), so
-            # under slipping wheels (chapter 11) the heading's error of a few degrees is left out
-            here = np.asarray(pose, float).copy()
-            if not self._sim.config.sensing.wheels_ideal:
-                here[2] = 0.0
-            self._solve(here, self.horizon or self._sim.config.max_primitives)
+            self._solve(search_start(pose, self._sim), self.horizon or self._sim.config.max_primitives)
             self._step = 0
         self.last_scores = self._action_scores[self._step]
         action = self.plan[self._step]

@@ -39,7 +39,7 @@ from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 from ..sim.world import World
-from .base import EpisodeStart, Planner
+from .base import EpisodeStart, Planner, search_start
 from .discs import DiscMap, DiscPlanner, majority_cylinder
 
 
@@ -69,19 +69,11 @@ class _Reference(Planner):
         self.last_scores = -(keys - keys.max()) / 1e6
         return int(ranking.choice[0][0])
 
-    def _here(self, pose: np.ndarray) -> np.ndarray:
-        """Where the search starts: the true pose, its heading set to the library's 0 under slipping
-        wheels (chapter 11: a few degrees the lattice leaves out, as the oracle does)."""
-        assert self._sim is not None
-        here = np.asarray(pose, float).copy()
-        if not self._sim.config.sensing.wheels_ideal:
-            here[2] = 0.0
-        return here
-
     def _choose_frozen(self, check, pose: np.ndarray) -> int:
         """:meth:`_choose` on the lattice of the remaining steps under a frozen (time-free) ``check``."""
         assert self._sim is not None
-        lattice = expand_with(check, self._sim.library, self._here(pose), max(self._remaining, 1))
+        start = search_start(pose, self._sim)
+        lattice = expand_with(check, self._sim.library, start, max(self._remaining, 1))
         return self._choose(lattice)
 
     def observe(self, action: int, obs_next: np.ndarray | None) -> None:
@@ -142,7 +134,7 @@ class SeenMotionPlanner(_Seeing):
         self._seen |= new
         known = np.array(sorted(self._seen), int)
         sub = self._known_world(world, known, np.isin(known, sorted(new)))
-        steps, pose = max(self._remaining, 1), self._here(pose)
+        steps, pose = max(self._remaining, 1), search_start(pose, self._sim)
         return self._choose(expand(sub, self._eyes.library, pose, steps, self.oracle.cap, self._time))
 
     def _known_world(self, world: World, known: np.ndarray, first: np.ndarray) -> World:

@@ -37,7 +37,7 @@ import numpy as np
 from ..config import ArrivalsConfig, MappingConfig, SimConfig
 from ..sim.lattice import StartCheck
 from ..sim.world import sample_times
-from .mapping import MappingPlanner, path_table
+from .mapping import MappingPlanner
 from .motion import WalkingMap
 
 
@@ -78,10 +78,7 @@ class TrackingPlanner(MappingPlanner):
         walking = speeds != 0
         points, reach = self.points, self._reach
         standing = points[~walking]
-        table = self._table
-        if table is None or reach + float(standing[:, 2].max(initial=0.0)) > table.margin:
-            table = path_table(self._library, self.resolution, reach + float(standing[:, 2].max(initial=0.0)),
-                               self._digest)
+        table = self._table_for(standing)
         movers, speeds = points[walking], speeds[walking]
         doubt = points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
         local = self._library.local_paths  # type: ignore[union-attr]
