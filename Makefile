@@ -25,7 +25,7 @@ $(VENV)/.installed: requirements.txt pyproject.toml
 		"$(TORCH_PIN)" $(QUIET_PIP)  # its dependencies come with requirements.txt, from PyPI
 	$(PY) -m pip install --quiet -r requirements.txt $(QUIET_PIP)
 	$(PY) -m pip install --quiet --no-deps -e . $(QUIET_PIP)
-	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, jupytext, jupyterlab, playwright, ray"  # fail loudly if incomplete
+	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, xdist, jupytext, jupyterlab, playwright, ray"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	@# JupyterLab for students: start the notebook's kernel without asking, no news pop-up
 	mkdir -p $(VENV)/share/jupyter/lab/settings
@@ -74,16 +74,22 @@ sync: install  ## after editing a chapter source (or its notebook outside Jupyte
 
 # Every chapter runs once here. nbval runs the notebooks first, in the book's mode (--keep-executed:
 # HUSKY_STATIC_WIDGETS=1 for its kernels only) and keeps each chapter that passed, outputs included,
-# in _build/executed/; tests/test_browser.py builds the book from those without executing again. A
-# student's live widgets have their own tests: test_jupyterlab.py (chapter 1 in JupyterLab's UI) and
-# test_widgets_live.py (every widget of the library, live). Root conftest.py, tests/executed_book.py.
+# in _build/executed/; tests/test_browser.py, run after them, builds the book from those without
+# executing again. A student's live widgets have their own tests: test_jupyterlab.py (chapter 1 in
+# JupyterLab's UI) and test_widgets_live.py (every widget of the library, live). Root conftest.py,
+# tests/executed_book.py. The first pytest run is spread over two processes, one per core (pytest-xdist;
+# --dist loadfile: a notebook's cells, and a file's tests, stay in one process, in order), each with
+# one torch thread (OMP_NUM_THREADS=1: two processes of two threads each on two cores wait on each
+# other); what a test checks does not depend on it.
+TEST_JOBS ?= 2
 test: install lint  ## unit tests + every notebook under nbval, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train discs --sensing realistic --profile quick --no-progress > /dev/null
-	HUSKY_PROFILE=quick $(PY) -m pytest notebooks tests --nbval-lax --keep-executed -p no:cacheprovider \
-		--durations=15
+	HUSKY_PROFILE=quick OMP_NUM_THREADS=1 $(PY) -m pytest notebooks tests --nbval-lax --keep-executed \
+		-p no:cacheprovider -n $(TEST_JOBS) --dist loadfile --ignore=tests/test_browser.py --durations=15
+	HUSKY_PROFILE=quick $(PY) -m pytest tests/test_browser.py -p no:cacheprovider --durations=5
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)
 	$(PY) benchmarks/bench_collection.py

@@ -30,16 +30,18 @@ from ..data.collect import world_seed_for
 from ..data.io import atomic_save_npz, load_npz
 from ..data.labels import survival_at
 from ..data.store import runs_dir
+from ..engines import map_tasks
 from ..models.memory import MemoryNet
 from ..planners.base import episode_start
 from ..planners.memory import MemoryPlanner
 from ..planners.oracle import OraclePlanner
-from ..progress import announce_build, tqdm
+from ..progress import announce_build
 from ..sim.fast import FastSimulator
 from ..training.memory import final_fingerprint, memory_dir, memory_fingerprint, new_memory_net
 from ..training.trainer import History, fit, save_model
 
 ROLLOUT_KEYS = ("image", "map", "world_seed", "pose")
+ROLLOUT_CHUNK = 25  #: worlds per rollout task (the result does not depend on it)
 
 
 @dataclass
@@ -72,20 +74,40 @@ def episode_steps(world_seed: np.ndarray) -> np.ndarray:
 
 
 def rollouts(
-    student: MemoryPlanner, seeds: np.ndarray, teacher: bool, profile: Profile, progress: bool = False
+    student: MemoryPlanner, seeds: np.ndarray, teacher: bool, profile: Profile, progress: bool = False,
+    workers: int | None = None,
 ) -> tuple[dict[str, np.ndarray], float]:
     """Roll out in each world of ``seeds``; return every visited state and the success rate.
 
     With ``teacher`` the oracle's actions are applied (the student only builds its map along the
-    way); otherwise the student's own. Step ``k`` is time ``k`` (:func:`episode_steps`).
+    way); otherwise the student's own. Step ``k`` is time ``k`` (:func:`episode_steps`). Chunks of
+    worlds run on ``workers`` processes (default ``EvalPlan.workers``) with
+    :func:`husky_course.engines.map_tasks`; the states come back in the order of ``seeds``, the same
+    for any number of workers.
     """
+    seeds = np.asarray(seeds, np.int64)
+    workers = profile.eval.workers if workers is None else workers
+    chunks = [c for c in np.array_split(seeds, max(1, -(-len(seeds) // ROLLOUT_CHUNK))) if len(c)]
+    parts = map_tasks(
+        _rollout_chunk, chunks, workers=workers, shared=(student, teacher, profile),
+        desc="rollouts (teacher)" if teacher else "rollouts (student)", unit="world",
+        sizes=[len(c) for c in chunks], progress=progress,
+    )
+    arrays = {k: np.concatenate([p[k] for p, _ in parts]) if parts else np.zeros(0) for k in ROLLOUT_KEYS}
+    return arrays, sum(n for _, n in parts) / max(len(seeds), 1)
+
+
+def _rollout_chunk(
+    shared: tuple[MemoryPlanner, bool, Profile], seeds: np.ndarray
+) -> tuple[dict[str, np.ndarray], int]:
+    """:func:`rollouts` in the worlds ``seeds`` (one task): their states and how many succeeded."""
+    student, teacher, profile = shared
     sim = FastSimulator(profile.sim)
     limit = profile.sim.max_primitives
     oracle = OraclePlanner()
     out: dict[str, list] = {k: [] for k in ROLLOUT_KEYS}
     successes = 0
-    desc = "rollouts (teacher)" if teacher else "rollouts (student)"
-    for seed in tqdm(seeds, desc=desc, disable=not progress):
+    for seed in seeds:
         world = sim.load(int(seed))
         pose = world.start.copy()
         student.reset(episode_start(student, sim, int(seed), pose, limit))
@@ -114,7 +136,7 @@ def rollouts(
         "world_seed": np.asarray(out["world_seed"], np.int64),
         "pose": np.asarray(out["pose"], np.float64),
     }
-    return arrays, successes / max(len(seeds), 1)
+    return arrays, successes
 
 
 def _tensors(data: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, torch.Tensor]:
