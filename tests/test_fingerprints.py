@@ -16,6 +16,7 @@ import pytest
 
 from husky_course import cli
 from husky_course.config import get_profile, with_world
+from husky_course.course import diagnosis
 from husky_course.data import code, store
 from husky_course.evaluation import certificate, stale
 from husky_course.training import builders, discs, memory
@@ -23,7 +24,7 @@ from husky_course.training import builders, discs, memory
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = get_profile("quick")
 #: every module whose code enters a key, through a name it imports ``code_fingerprint`` by
-USERS = (store, builders, memory, discs, certificate)
+USERS = (store, builders, memory, discs, certificate, diagnosis)
 LABELS = Path("data/labels.py")
 LABEL_LINE = "return survival(expand(world, sim.library, np.asarray(pose, float), horizon, cap=0.0, t0=t))"
 
@@ -57,6 +58,7 @@ def _keys(monkeypatch: pytest.MonkeyPatch, root: Path) -> dict[str, object]:
         keys[f"memory {kind}"] = memory.memory_fingerprint(with_world(QUICK, kind))
         keys[f"certificate {kind}"] = certificate.certificate_fingerprint(with_world(QUICK, kind))
     keys["discs"] = discs.disc_fingerprint(QUICK)
+    keys["diagnosis"] = diagnosis.diagnosis_fingerprint(QUICK, "some-encoder", "some-dataset")
     return keys
 
 
@@ -91,17 +93,18 @@ def test_a_label_function_change_rebuilds_the_labels_and_what_was_trained_on_the
     edit = {LABELS: (LABEL_LINE, LABEL_LINE.replace("cap=0.0", "cap=0.1"))}
     after = _keys(monkeypatch, _copy(tmp_path, "b", edit))
     changed = {name for name in before if before[name] != after[name]}
-    # the labels, the network distilled from them, and the memory student (DAgger's labels) with its
-    # certificate; the dataset and the models trained on the dataset alone are kept
+    # the labels, the network distilled from them, the memory student (DAgger's labels) with its
+    # certificate, and chapter 4's diagnosis (its reward labels come from the same module); the
+    # dataset and the models trained on the dataset alone are kept
     assert changed == {"labels", "distilled", "memory static", "memory moving",
-                       "certificate static", "certificate moving"}
+                       "certificate static", "certificate moving", "diagnosis"}
 
 
 def test_a_model_change_rebuilds_that_model_and_what_builds_on_it(tmp_path, monkeypatch):
     before = _keys(monkeypatch, _copy(tmp_path, "a"))
     after = _keys(monkeypatch, _copy(tmp_path, "b", {Path("models/paper.py"): ("nn.ELU()", "nn.ReLU()")}))
     changed = {name for name in before if before[name] != after[name]}
-    assert {"encoder_decoder", "reward_net"} <= changed
+    assert {"encoder_decoder", "reward_net", "diagnosis"} <= changed
     assert not changed & {"dataset", "labels", "discs"}
 
 

@@ -30,6 +30,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from ..config import CameraConfig, Profile, SimConfig, TrainConfig, config_hash
+from ..data.code import code_fingerprint
 from ..data.dataset import Dataset
 from ..data.io import atomic_write_bytes
 from ..data.labels import nearest_obstacle_distance, primitive_outcomes
@@ -320,21 +321,28 @@ class Diagnosis:
         return cls(variants, {k: float(v) for k, v in data["probes"].items()})
 
 
-def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
-    """Chapter 4's variants and probes, trained once and cached as ``results.json``.
-
-    The cache is keyed by the dataset, the frozen encoder's checkpoint, both training configs and
-    the list of variants; anything else changing builds a new entry instead of reusing a stale one.
-    """
-    ed = get_encoder_decoder(profile, progress)
-    ds = get_dataset(profile, progress=False)
-    fingerprint = {
-        "dataset": dataset_id(ds),
-        "encoder": config_hash(ed.fingerprint),  # the encoder's content key, never its path
+def diagnosis_fingerprint(profile: Profile, encoder: str, dataset: str) -> dict:
+    """The key of chapter 4's results: the dataset's and the frozen encoder's content keys (never
+    paths), both training configs, the variants, and the code that trains and scores them."""
+    return {
+        "dataset": dataset,
+        "encoder": encoder,
         "reward_net": asdict(profile.train.reward_net),
         "probe": asdict(profile.train.probe),
         "variants": [asdict(v) for v in VARIANTS],
+        "code": code_fingerprint(__name__),
     }
+
+
+def get_diagnosis(profile: Profile, progress: bool = True) -> Diagnosis:
+    """Chapter 4's variants and probes, trained once and cached as ``results.json``.
+
+    The cache is keyed by :func:`diagnosis_fingerprint`; anything in it changing builds a new entry
+    instead of reusing a stale one.
+    """
+    ed = get_encoder_decoder(profile, progress)
+    ds = get_dataset(profile, progress=False)
+    fingerprint = diagnosis_fingerprint(profile, config_hash(ed.fingerprint), dataset_id(ds))
     path = model_dir("diagnosis", fingerprint, profile) / "results.json"
     if path.is_file():
         return Diagnosis.from_dict(json.loads(path.read_text()))
