@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import ray  # installed by `make install` (the `ray` extra): an ImportError here is a failure
+from checkpoints import trained
 from serial_survival import survival_steps
 
 from husky_course import engines
@@ -31,7 +32,6 @@ from husky_course.data.dataset import STEP_ARRAYS, VIDEO_ARRAYS, load_dataset
 from husky_course.data.labels import survival_at, survival_steps_parallel
 from husky_course.engines import map_tasks, ray_init_args, resolve_engine
 from husky_course.evaluation.episodes import evaluate
-from husky_course.planners.base import PlannerError
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
@@ -166,18 +166,9 @@ def test_the_cli_engine_reaches_labels_and_evaluation(small_dataset_dir, ray_clu
     np.testing.assert_array_equal(labels, survival_steps(ds, 2, idx, QUICK.sim))
 
 
-def _learned(name: str):
-    try:
-        return make_planner(name, profile=QUICK)
-    except PlannerError as exc:
-        if os.environ.get("CI"):
-            raise
-        pytest.skip(f"quick checkpoints missing ({exc}); `make test` trains them first")
-
-
 @pytest.mark.parametrize("name", ["random", "heuristic", "oracle", "memory"])
 def test_evaluation_is_the_same_numbers_on_any_engine(name, ray_cluster):
-    planner = _learned(name) if name == "memory" else make_planner(name)
+    planner = trained(name) if name == "memory" else make_planner(name)
     here = evaluate(planner, 20, seed=3, sim=FastSimulator(QUICK.sim), progress=False)
     on_ray = evaluate(planner, 20, seed=3, progress=False, engine="ray", workers=2, worlds_per_task=3)
     assert _json(on_ray) == _json(here)

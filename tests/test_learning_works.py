@@ -10,30 +10,16 @@ tests' own: not the book's reporting set (0), the tuning set (1) or the certific
 from __future__ import annotations
 
 import pytest
+from checkpoints import trained
 
-from husky_course.config import Profile, get_profile, with_sensing, with_world
+from husky_course.config import get_profile, with_sensing, with_world
 from husky_course.data.store import ARTIFACTS_ENV
 from husky_course.evaluation.episodes import evaluate
-from husky_course.planners.base import Planner, PlannerError
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
 QUICK = get_profile("quick")
 WORLDS, EVAL_SET = 200, 3
-BUILD = ("`python -m husky_course train all --profile quick` (and, for chapter 10's student, "
-         "`python -m husky_course train memory --world moving --profile quick`; for chapter 11's disc "
-         "network, `python -m husky_course train discs --sensing realistic --profile quick`)")
-
-
-def trained(name: str, profile: Profile = QUICK) -> Planner:
-    """The learned planner ``name`` from its stored checkpoints, or a test failure naming the command."""
-    try:
-        return make_planner(name, profile=profile)
-    except PlannerError as exc:
-        pytest.fail(f"the quick profile's trained {name!r} planner is missing ({exc}); build the "
-                    f"checkpoints with {BUILD}, or run `make test`, which does it first", pytrace=False)
-
-
 def test_a_missing_checkpoint_fails_with_the_command_that_builds_it(tmp_path, monkeypatch):
     monkeypatch.setenv(ARTIFACTS_ENV, str(tmp_path))  # an empty artifact store
     for name, profile, command in (("lookahead", QUICK, "train joint --profile quick`"),
