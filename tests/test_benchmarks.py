@@ -9,7 +9,7 @@ result. Nothing is timed against a threshold: the scripts print ratios measured 
 Those that compare planners or settings must do it on the tuning set (evaluation set 1) unless
 asked otherwise: their printed line names the set, and the pattern checks it. They need the quick
 artifacts that ``make test`` builds before pytest (a missing one fails with the command that
-builds it). The scripts run two at a time: all 13 took 77 s on 2 cores shared with other work.
+builds it). The scripts run two at a time.
 """
 
 from __future__ import annotations
@@ -52,6 +52,11 @@ CASES: dict[str, tuple[list[str], str]] = {
     "exp_dagger.py": (
         ["--profile", "quick", "--worlds", "2", "--eval-worlds", "3", "--epochs", "1", "--max-images", "400"],
         rf"tuning set: 3 worlds of {TUNING}[\s\S]*DAgger round's success rate is (inside|outside)",
+    ),
+    "exp_epochs.py": (
+        ["distilled", "1,2", "--profile", "quick", "--worlds", "3", "--workers", "1"],
+        rf"distilled \(distilled planner\), 3 worlds of {TUNING}[\s\S]*\n +2 epochs +val \d\.\d{{4}} "
+        r".*success \d\.\d{3} \[.*only with 2: \d+, only with 1: \d+, p = \d\.\d\d",
     ),
     "exp_memory_recipe.py": (
         ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
