@@ -133,7 +133,7 @@ def _profiles() -> dict[str, Profile]:
             build_minutes=(
                 ("dataset", 0.2), ("encoder_decoder", 1.5), ("reward_net", 0.4), ("safety_image", 0.5),
                 ("safety_prim", 0.5), ("joint", 1.3), ("diagnosis", 2), ("rnn", 3.3),
-                ("survival labels", 0.9), ("distilled", 1.1), ("memory", 4), ("discs", 1.6),
+                ("survival labels", 0.9), ("distilled", 2.2), ("memory", 4), ("discs", 1.6),
                 ("certificate", 2.7),
             ),
         ),

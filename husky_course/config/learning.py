@@ -100,7 +100,9 @@ class TrainingPlan:
     # model's cap stays 5: at 10 Algorithm 1 crossed the same 0.486 (74 against 74)
     # (`python benchmarks/exp_epochs.py rnn 5,10,15` and `joint 5,10`)
     rnn: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=10, patience=3))
-    distilled: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=6, patience=3))
+    # the distilled network's cap, raised from 6 to 12 (issue 25): validation loss 0.176 -> 0.167, tuning
+    # set 0.644 -> 0.664 (37 worlds against 27, p = 0.26) for 1 min more (`exp_epochs.py distilled 6,12`)
+    distilled: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=12, patience=3))
 
 
 @dataclass(frozen=True)
