@@ -17,14 +17,16 @@ TORCH_PIN = $$(grep -m1 -E '^torch==' requirements.txt | cut -d'\#' -f1 | tr -d 
 # pip's own messages reach the terminal and a failed pip fails the target (pipefail); only the
 # "WARNING: Location ... is ignored" lines of an absent local package folder are left out
 QUIET_PIP = 2>&1 | { grep -v "^WARNING: Location" || true; }
+# --no-compile: Python writes each module's bytecode the first time it is imported, for the modules
+# the course uses, instead of pip compiling every file of every package (20 s of a fresh install)
 
 $(VENV)/.installed: requirements.txt pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip $(QUIET_PIP)
-	$(PY) -m pip install --quiet --no-deps $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) \
+	$(PY) -m pip install --quiet --no-compile --upgrade pip $(QUIET_PIP)
+	$(PY) -m pip install --quiet --no-compile --no-deps $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) \
 		"$(TORCH_PIN)" $(QUIET_PIP)  # its dependencies come with requirements.txt, from PyPI
-	$(PY) -m pip install --quiet -r requirements.txt $(QUIET_PIP)
-	$(PY) -m pip install --quiet --no-deps -e . $(QUIET_PIP)
+	$(PY) -m pip install --quiet --no-compile -r requirements.txt $(QUIET_PIP)
+	$(PY) -m pip install --quiet --no-compile --no-deps -e . $(QUIET_PIP)
 	$(PY) -c "import husky_course, torch, pybullet, jupyter_book, nbval, xdist, jupytext, jupyterlab, playwright, ray"  # fail loudly if incomplete
 	$(PY) -m ipykernel install --sys-prefix --name python3 >/dev/null
 	@# JupyterLab for students: start the notebook's kernel without asking, no news pop-up
