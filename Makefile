@@ -79,19 +79,19 @@ sync: install  ## after editing a chapter source (or its notebook outside Jupyte
 # in _build/executed/; tests/test_browser.py, run after them, builds the book from those without
 # executing again. A student's live widgets have their own tests: test_jupyterlab.py (chapter 1 in
 # JupyterLab's UI) and test_widgets_live.py (every widget of the library, live). Root conftest.py,
-# tests/executed_book.py. The first pytest run is spread over two processes, one per core (pytest-xdist;
-# --dist loadfile: a notebook's cells, and a file's tests, stay in one process, in order), each with
-# one torch thread (OMP_NUM_THREADS=1: two processes of two threads each on two cores wait on each
-# other); what a test checks does not depend on it.
+# tests/executed_book.py. The run is spread over two processes, one per core (pytest-xdist; --dist
+# loadfile, scopes from conftest.py: a file's tests stay in one process, in order, and one process runs
+# every chapter in order and then the browser test), each with one torch thread (OMP_NUM_THREADS=1:
+# two processes of two threads each on two cores wait on each other); what a test checks does not
+# depend on it.
 TEST_JOBS ?= 2
-test: install lint  ## unit tests + every notebook under nbval, quick profile
+test: install lint  ## unit tests + every notebook under nbval + the built book in a browser, quick profile
 	$(PY) -m husky_course collect --profile quick --workers 2 --no-progress > /dev/null
 	$(PY) -m husky_course train all --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train memory --world moving --profile quick --no-progress > /dev/null
 	$(PY) -m husky_course train discs --sensing realistic --profile quick --no-progress > /dev/null
 	HUSKY_PROFILE=quick OMP_NUM_THREADS=1 $(PY) -m pytest notebooks tests --nbval-lax --keep-executed \
-		-p no:cacheprovider -n $(TEST_JOBS) --dist loadfile --ignore=tests/test_browser.py --durations=15
-	HUSKY_PROFILE=quick $(PY) -m pytest tests/test_browser.py -p no:cacheprovider --durations=5
+		-p no:cacheprovider -n $(TEST_JOBS) --dist loadfile --durations=15
 
 bench: install  ## speeds measured side by side: collection, decisions, training (full profile)
 	$(PY) benchmarks/bench_collection.py

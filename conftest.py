@@ -1,6 +1,7 @@
 """pytest's ``--keep-executed``: nbval's chapter executions become the browser test's book.
 
-See ``tests/executed_book.py``. Without the option nothing here changes a run.
+See ``tests/executed_book.py``. Without the option nothing here changes a run. Also: which tests share
+a process, in which order, under ``pytest -n N --dist loadfile`` (:func:`pytest_xdist_make_scheduler`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,36 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         help="run nbval's kernels in the book's mode (HUSKY_STATIC_WIDGETS=1) and keep each chapter "
         "whose cells all passed, outputs included, in _build/executed/ for the browser test's book",
     )
+
+
+#: the scope of pytest-xdist's scheduling that holds every chapter and, after them, the browser test
+CHAPTERS_SCOPE = "the chapters, then the book built from them"
+
+
+def _scope(nodeid: str) -> str:
+    file = nodeid.split("::")[0]
+    return CHAPTERS_SCOPE if file.startswith("notebooks/") or file == "tests/test_browser.py" else file
+
+
+@pytest.hookimpl(optionalhook=True)  # a hook of pytest-xdist's, when it is installed
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
+    """Under ``-n N --dist loadfile``, a file's tests stay in one process, in order, and so do all the
+    chapters, in their order, followed by ``tests/test_browser.py``.
+
+    In one process, chapters 10 and 11 read chapter 8's evaluations from the store instead of each
+    computing them again beside it, and the browser test's book (built from the chapters nbval just
+    executed, ``tests/executed_book.py``) comes after the last chapter, while the other process still
+    runs the unit tests.
+    """
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class ChaptersInOrder(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _scope(nodeid)
+
+    return ChaptersInOrder(config, log)
 
 
 def _nbval_cell(item: pytest.Item) -> bool:

@@ -49,16 +49,18 @@ def _rss_mib() -> float:
     return float("nan")
 
 
-def test_thousand_resets_do_not_leak_clients():
+def test_many_resets_do_not_leak_clients():
+    """Clients and bodies are counted exactly; memory is the backstop. Measured: 400 resets after the
+    warm-up grow resident memory by under 0.1 MiB, so 5 MiB over 300 flags a leak of 17 KiB a reset."""
     env = HuskyNavEnv(backend="pybullet")
     cid = env.sim.client
     for seed in range(100):  # warm up allocators and caches before measuring
         env.reset(seed=seed)
     before = _rss_mib()
-    for seed in range(1000):
+    for seed in range(300):
         env.reset(seed=seed)
     growth = _rss_mib() - before
-    assert not growth > 20.0, f"1,000 resets grew resident memory by {growth:.1f} MiB"
+    assert not growth > 5.0, f"300 resets grew resident memory by {growth:.1f} MiB"
     assert env.sim.client == cid and p.isConnected(cid)
     n_bodies = p.getNumBodies(physicsClientId=cid)
     assert n_bodies == 1 + 1 + 2 + 20 + 1  # plane, husky, walls, cylinders, collision proxy

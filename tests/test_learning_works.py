@@ -1,4 +1,5 @@
-"""Tests that fail if learning breaks: the quick profile's trained planners, on 200 held-out worlds.
+"""Tests that fail if learning breaks: the quick profile's trained planners, on 200 held-out worlds
+of each course.
 
 They load the checkpoints ``make test`` trains before running pytest (``train all``); they never
 train. A missing checkpoint is a failure whose message names the commands that build it, never a
@@ -19,7 +20,10 @@ from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
 QUICK = get_profile("quick")
+MOVING = with_world(QUICK, "moving")
 WORLDS, EVAL_SET = 200, 3
+
+
 def test_a_missing_checkpoint_fails_with_the_command_that_builds_it(tmp_path, monkeypatch):
     monkeypatch.setenv(ARTIFACTS_ENV, str(tmp_path))  # an empty artifact store
     for name, profile, command in (("lookahead", QUICK, "train joint --profile quick`"),
@@ -56,6 +60,26 @@ def test_memory_student_beats_the_hand_written_heuristic(results):
     """Non-overlapping exact 95% intervals on the 200 test-only worlds."""
     memory, heuristic = results["memory"], results["heuristic"]
     assert memory.success_ci95[0] > heuristic.success_ci95[1], (memory.success_ci95, heuristic.success_ci95)
+
+
+@pytest.fixture(scope="module")
+def moving_results():
+    """Chapter 10's comparison on the moving course: the moving-trained student, the hand-written
+    heuristic (it reads the moving course's config), the static-trained distilled planner, random."""
+    sim = FastSimulator(MOVING.sim)
+    planners = {"random": make_planner("random"), "heuristic": make_planner("heuristic", config=MOVING.sim),
+                "distilled": trained("distilled"), "memory": trained("memory", MOVING)}
+    return {name: evaluate(p, WORLDS, EVAL_SET, sim=sim, progress=False) for name, p in planners.items()}
+
+
+@pytest.mark.parametrize("other", ["random", "heuristic", "distilled"])
+def test_moving_trained_student_beats_the_others_on_the_moving_course(moving_results, other):
+    """Non-overlapping exact 95% intervals on the 200 test-only moving worlds."""
+    memory, them = moving_results["memory"], moving_results[other]
+    print(f"moving course: memory {memory.success_ci95}, {other} {them.success_ci95}")
+    assert memory.success_ci95[0] > them.success_ci95[1], (memory.success_ci95, them.success_ci95)
+    if other == "random":  # and it drives on: a student that stood still would not count as winning
+        assert memory.mean_prims > them.mean_prims + 1
 
 
 def test_training_with_noise_helps_the_disc_network_under_noise():

@@ -200,8 +200,9 @@ def test_cli_world_switch(tmp_path, capsys):
         main(["evaluate", "--planner", "oracle", "--world", "windy"])
 
 
-def test_moving_student_reads_its_motion_channels_and_beats_random():
-    """The quick profile's moving-trained student (built by `make test` before pytest)."""
+def test_moving_student_reads_its_motion_channels():
+    """The quick profile's moving-trained student (built by `make test` before pytest); how well it
+    drives is tests/test_learning_works.py's."""
     from husky_course.planners.base import episode_start
 
     student = make_planner("memory", profile=MOVING)
@@ -222,10 +223,6 @@ def test_moving_student_reads_its_motion_channels_and_beats_random():
                   MOVING.memory.map_ahead, MOVING.memory.map_half_width)
     np.testing.assert_array_equal(grid[3], once)
     assert once.any() and (once <= now).all()
-    mine = evaluate(student, 60, 1, config=MOVING.sim, progress=False, workers=2)
-    rand = evaluate(make_planner("random"), 60, 1, config=MOVING.sim, progress=False)
-    assert mine.success_ci95[0] > rand.success_ci95[1]
-    assert mine.mean_prims > rand.mean_prims + 1
 
 
 def test_sim_for_world_round_trip():
