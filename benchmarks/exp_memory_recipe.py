@@ -42,6 +42,8 @@ def main() -> None:
     mem = course.memory
     changes = {k: v for k, v in (("rounds", args.rounds), ("worlds_per_round", args.worlds_per_round),
                                  ("map_cells", args.map_cells)) if v is not None}
+    if "worlds_per_round" in changes:  # on either course
+        changes["moving_worlds_per_round"] = changes["worlds_per_round"]
     mem = replace(mem, **changes)
     if args.epochs is not None:
         mem = replace(mem, train=replace(mem.train, epochs=args.epochs))

@@ -45,6 +45,8 @@ def main() -> None:
     profile = with_world(get_profile(args.profile), "moving")
     mem = profile.memory
     changes = {k: v for k, v in (("rounds", args.rounds), ("worlds_per_round", args.worlds_per_round)) if v}
+    if "worlds_per_round" in changes:  # on either course
+        changes["moving_worlds_per_round"] = changes["worlds_per_round"]
     mem = replace(mem, **changes)
     if args.epochs is not None:
         mem = replace(mem, train=replace(mem.train, epochs=args.epochs))

@@ -170,3 +170,20 @@ def test_dagger_rounds_are_resumable_artifacts(tmp_path, monkeypatch):
     assert not planner.privileged
     planner.reset(EpisodeStart(FastSimulator().library, 10, 0))
     assert 0 <= planner.act(np.ones((50, 50), np.float32)) < 25
+
+
+def test_round_worlds_per_course():
+    """The moving course's rounds may have their own size (the quick profile halves them); the rounds
+    follow one another on the collection seed, and no world is a round's twice."""
+    from husky_course.config import with_world
+
+    moving = with_world(QUICK, "moving")
+    assert QUICK.memory.moving_worlds_per_round is not None
+    for course, n in ((QUICK, QUICK.memory.worlds_per_round), (moving, QUICK.memory.moving_worlds_per_round)):
+        rounds = [dagger.round_worlds(course, r) for r in range(2)]
+        assert [len(w) for w in rounds] == [n, n]
+        assert not set(rounds[0]) & set(rounds[1])
+    np.testing.assert_array_equal(dagger.round_worlds(moving, 0),
+                                  dagger.round_worlds(QUICK, 0)[:QUICK.memory.moving_worlds_per_round])
+    same = replace(moving, memory=replace(QUICK.memory, moving_worlds_per_round=None))
+    assert len(dagger.round_worlds(same, 1)) == QUICK.memory.worlds_per_round

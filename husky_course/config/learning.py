@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .sim import SimConfig
+from .sim import SimConfig, world_kind
 
 
 @dataclass(frozen=True)
@@ -122,8 +122,16 @@ class MemoryConfig:
     label_horizon: int = 5  #: survival labels over this many steps (the simulator's lattice search)
     rounds: int = 3  #: round 0 follows the teacher, later rounds the student (DAgger)
     worlds_per_round: int = 450  #: sized so that `make book`'s budget holds (see the closing notes)
+    #: worlds per round on the moving course (``None``: ``worlds_per_round``); see :meth:`worlds_on`
+    moving_worlds_per_round: int | None = None
     collection_seed: int = 2
     train: TrainConfig = field(default_factory=lambda: TrainConfig(epochs=10, patience=3))
+
+    def worlds_on(self, sim: SimConfig) -> int:
+        """DAgger's worlds per round on ``sim``'s course."""
+        if world_kind(sim) == "moving" and self.moving_worlds_per_round is not None:
+            return self.moving_worlds_per_round
+        return self.worlds_per_round
 
 
 @dataclass(frozen=True)
