@@ -58,8 +58,8 @@ class Student:
 def round_worlds(profile: Profile, r: int) -> np.ndarray:
     """World seeds of round ``r``: videos ``r * n + [0, n)`` of the seed, ``n`` the worlds per round on
     the profile's course (:meth:`~husky_course.config.MemoryConfig.worlds_on`)."""
-    n = profile.memory.worlds_on(profile.sim)
     mem = profile.memory
+    n = mem.worlds_on(profile.sim)
     videos = range(r * n, (r + 1) * n)
     return np.array([world_seed_for(mem.collection_seed, v) for v in videos])
 
