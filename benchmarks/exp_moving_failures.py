@@ -1,15 +1,18 @@
 """Experiment: where do the moving course's camera-based planners fail, and what did they know?
 
-Run: ``python benchmarks/exp_moving_failures.py [--profile full] [--worlds 200] [--planner tracking|memory]``.
+Run: ``python benchmarks/exp_moving_failures.py [--profile full] [--worlds 200]
+[--planner tracking|memory|discs]``.
 
 On the tuning set (evaluation set 1) of the moving course. For every episode that ends in a
 collision on a world the oracle crosses, it finds the **fatal decision**: the last step from
 which the true world (every cylinder, its motion) still had a way through, found by the oracle's
 lattice search from the pose and time of that step. It then asks what the planner knew there of
 the cylinder it hit, from its tracks (:class:`husky_course.planners.motion.Tracks`; the tracking
-planner and the moving-trained student keep the same ones):
+planner, the disc planner and the moving-trained student keep the same ones):
 
-* *unseen*: no image had rendered it yet;
+* *unseen*: no image had rendered it yet, split by where it was at the fatal decision: *beside
+  the view* (its bearing outside the field of view), *beyond range* (further than the far plane)
+  or *hidden* (in the view, behind something else);
 * *seen, not in its tracks*: rendered, but no track lies near it (occluded, merged, forgotten);
 * *first sight*: a moving cylinder seen by one image only, so its motion was unknown;
 * *motion read right / wrong*: a moving cylinder with a track whose velocity is within 0.1 m per
@@ -24,17 +27,20 @@ motion estimates is in the first four; the last is the planner's own precision.
 from __future__ import annotations
 
 import argparse
+import math
 from collections import Counter
 
 import numpy as np
 
-from husky_course.config import OracleConfig, get_profile, with_world
+from husky_course.config import CameraConfig, OracleConfig, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.planners.base import episode_start
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import expand, survival
 from husky_course.sim.world import World
+
+FOV_HALF_DEG, FAR = CameraConfig.fov_deg / 2, CameraConfig.far
 
 
 def crossable(sim: FastSimulator, world: World, pose: np.ndarray, t: int, steps: int) -> bool:
@@ -46,7 +52,10 @@ def crossable(sim: FastSimulator, world: World, pose: np.ndarray, t: int, steps:
 def kind(world: World, j: int, t: int, pose: np.ndarray, first_seen: int | None, tracks: list) -> str:
     """What the planner knew at step ``t`` of cylinder ``j`` (see the module)."""
     if first_seen is None or first_seen > t:
-        return "unseen"
+        rel = world.obstacles_at(float(t))[j, :2] - pose[:2]
+        if abs(math.degrees(math.atan2(rel[1], rel[0]))) > FOV_HALF_DEG:
+            return "unseen, beside the view"
+        return "unseen, beyond range" if math.hypot(*rel) > FAR else "unseen, hidden"
     moving = world.speeds[j] != 0
     rel = world.obstacles_at(float(t))[j, :2] - pose[:2]
     near = [(v, looks) for (y, v), x, looks in tracks if abs(x - rel[0]) < 0.4 and abs(y - rel[1]) < 0.4]
@@ -65,12 +74,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
     parser.add_argument("--worlds", type=int, default=200)
-    parser.add_argument("--planner", default="tracking", choices=("tracking", "memory"))
+    parser.add_argument("--planner", default="tracking", choices=("tracking", "memory", "discs"))
     args = parser.parse_args()
     profile = with_world(get_profile(args.profile), "moving")
     sim, limit = FastSimulator(profile.sim), profile.sim.max_primitives
-    planner = (make_planner("tracking", config=profile.sim) if args.planner == "tracking"
-               else make_planner("memory", profile=profile))
+    if args.planner == "tracking":
+        planner = make_planner("tracking", config=profile.sim)
+    elif args.planner == "discs":  # its discs walk on the course it is given
+        planner = make_planner("discs", profile=profile, config=profile.sim)
+    else:
+        planner = make_planner("memory", profile=profile)
     failures: Counter[str] = Counter()
     successes = 0
     for seed in eval_world_seeds(args.worlds, 1):

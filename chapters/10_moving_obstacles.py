@@ -177,7 +177,9 @@ display(Markdown(
 # into free space; when every guess left walks one way, it gets their mean speed. Otherwise it is
 # taken as standing until the next image. The planners without learning (`tracking`) and with
 # learned discs (`discs`) both use this rule; the memory student reads *seen once* instead.
-# `benchmarks/exp_moving_tracker.py` measures the estimate against the truth.
+# `benchmarks/exp_moving_tracker.py` measures the estimate against the truth, and
+# `benchmarks/exp_moving_ladder.py` how far each planner would get if its map were told the true
+# motion, rung by rung (where its tracks know it, from a cylinder's second image on, always).
 #
 # **The map walks.** Both planners keep the mapping planner's map of everything seen (chapter 8),
 # each point now carrying its velocity and walking on after every step, also when the camera no

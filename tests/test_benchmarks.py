@@ -64,8 +64,13 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 worlds of {TUNING}, moving course:\n +course's student +success \d\.\d{{3}}",
     ),
     "exp_moving_failures.py": (
-        ["--profile", "quick", "--worlds", "3", "--planner", "memory"],
-        r"memory on 3 moving tuning worlds: success \d\.\d{3}",
+        ["--profile", "quick", "--worlds", "3", "--planner", "discs"],
+        r"discs on 3 moving tuning worlds: success \d\.\d{3}",
+    ),
+    "exp_moving_first_sight.py": (
+        ["--profile", "quick", "--train-worlds", "4", "--worlds", "3", "--epochs", "1", "--workers", "1"],
+        rf"first sights in 4 training worlds[\s\S]*held-out loss \d\.\d{{3}}[\s\S]*3 worlds of {TUNING}"
+        r"[\s\S]*network at 0\.50 +\d\.\d{3} .*only with the rule: \d+[\s\S]*lost tracks within 0\.4 m",
     ),
     "exp_moving_arrivals.py": (
         ["--profile", "quick", "--worlds", "3", "--workers", "1"],
@@ -80,7 +85,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_ladder.py": (
         ["--profile", "quick", "--worlds", "3"],
-        rf"3 moving tuning worlds \({TUNING}\)[\s\S]*90% of the oracle \(the goal\) +\d\.\d{{3}}",
+        rf"3 moving tuning worlds \({TUNING}\)[\s\S]*discs, velocities first sight, never seen +\d\.\d{{3}}"
+        r"[\s\S]*90% of the oracle \(the goal\) +\d\.\d{3}",
     ),
     "exp_moving_student.py": (
         ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
