@@ -53,27 +53,13 @@ from husky_course.planners.base import EpisodeStart, Planner
 from husky_course.planners.discs import WalkingDiscMap
 from husky_course.planners.motion import WalkingMap
 from husky_course.planners.oracle import OraclePlanner
-from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner
+from husky_course.planners.reference import ON_CYLINDER, SecondLookPlanner, SeenMotionPlanner, truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
 RULES = ("estimated", "tracked", "second image", "always")
 DISC_RULES = ("estimated", "tracked", "first sight, seen before", "first sight, never seen", "first sight",
               "second image", "always", "always, exact discs", "every cylinder seen, exactly")
-ON_CYLINDER = 0.3  #: a map point within this of a cylinder's surface is on it (m)
-
-
-def truth_now(sim: FastSimulator, pose: np.ndarray, time: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(cylinders (n, 3), velocity (n,))``: every cylinder's ``(x, y, r)`` in the robot's frame at
-    ``pose`` and ``time``, and its lateral velocity in that frame (m per step; privileged)."""
-    assert sim.world is not None
-    world, (px, py, yaw) = sim.world, pose
-    now, later = world.obstacles_at(time), world.obstacles_at(time + 1.0)
-    c, s = np.cos(yaw), np.sin(yaw)  # the map is in the robot's frame
-    rx = c * (now[:, 0] - px) + s * (now[:, 1] - py)
-    ry = -s * (now[:, 0] - px) + c * (now[:, 1] - py)
-    vy = -s * (later[:, 0] - now[:, 0]) + c * (later[:, 1] - now[:, 1])
-    return np.c_[rx, ry, now[:, 2]], vy
 
 
 def true_velocity(sim: FastSimulator, pose: np.ndarray, time: float,
@@ -81,7 +67,8 @@ def true_velocity(sim: FastSimulator, pose: np.ndarray, time: float,
     """``(velocity, cylinder, on)`` of robot-frame ``points (m, 2+)``: the true lateral velocity (m per
     step, robot frame) of the cylinder each lies on (within ``ON_CYLINDER`` of its surface; else 0),
     that cylinder's index (the nearest one's when none is that near), and whether it is that near."""
-    cyl, vy = truth_now(sim, pose, time)
+    assert sim.world is not None
+    cyl, vy = truth_in_frame(sim.world, pose, time)
     gap = np.hypot(points[:, :1] - cyl[:, 0], points[:, 1:2] - cyl[:, 1]) - cyl[:, 2]
     j = np.argmin(gap, axis=1)
     on = gap[np.arange(len(j)), j] < ON_CYLINDER
@@ -127,7 +114,7 @@ class InformedDiscMap(WalkingDiscMap):
         super().add(obs)
         assert self.sim is not None
         if self.rule == "every cylinder seen, exactly":  # the reference's knowledge, this planner's search
-            cyl, vy = truth_now(self.sim, self.pose, self.time)
+            cyl, vy = truth_in_frame(self.sim.world, self.pose, self.time)
             known = np.union1d(self.before, self.sim.visible_obstacles(self.pose, self.time)).astype(int)
             self.discs, self.speeds, self.fresh = cyl[known], vy[known], np.zeros(len(known), bool)
             return
@@ -135,7 +122,7 @@ class InformedDiscMap(WalkingDiscMap):
             return
         truth, j, on = true_velocity(self.sim, self.pose, self.time, self.discs)
         if self.rule == "always, exact discs":  # each disc on a cylinder is that cylinder, exactly
-            self.discs[on] = truth_now(self.sim, self.pose, self.time)[0][j[on]]
+            self.discs[on] = truth_in_frame(self.sim.world, self.pose, self.time)[0][j[on]]
         seen_before = np.isin(j, self.before)
         told = {"tracked": ~self.fresh, "first sight, seen before": self.fresh & seen_before,
                 "first sight, never seen": self.fresh & ~seen_before, "first sight": self.fresh,

@@ -32,6 +32,7 @@ from IPython.display import HTML, Markdown, display
 from husky_course.config import get_profile, with_world
 from husky_course.course import exercises  # noqa: F401  (used in the exercises)
 from husky_course.course.diagnosis import sign_test
+from husky_course.course.ladder import moving_ladder
 from husky_course.data.calibration import mean_interval, video_lengths
 from husky_course.evaluation.analysis import obstacle_hit
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
@@ -366,6 +367,42 @@ text += (
     + ("a difference the worlds show, at 5%)." if p_disc < 0.05 else "no difference the worlds can show at 5%).")
 )
 display(Markdown(text))
+
+# %% [markdown]
+# ## What limits the disc planner: a ladder on the tuning set
+#
+# The best learned planner here is the disc planner. Where does it lose? Its own map is told more
+# and more of the truth, on the tuning set (never the reporting set): the true motion of the
+# cylinders its tracks see for the first time (one image shows where a cylinder is, not where it
+# goes); the true motion of every disc; then, in place of its discs, every cylinder any image has
+# rendered so far, exactly, with its motion (its search and its wall points unchanged). The last
+# rung knows what the perfect-perception reference knows, and differs from it only in the search.
+# These rungs are privileged references, not bounds: each tells the planner something no camera
+# can, and a planner could also do better by driving differently.
+
+# %%
+N_TUNE, TUNE = profile.eval.tuning_worlds, profile.eval.tuning_seed  # the tuning set
+rungs = {name: evaluate_stored(p, N_TUNE, TUNE, moving, progress=False, workers=W)
+         for name, p in moving_ladder(profile)}
+display(Markdown(markdown_table([
+    {"rung (moving course, tuning set)": k, "success": r.success_rate,
+     "95% interval": f"[{r.success_ci95[0]:.3f}, {r.success_ci95[1]:.3f}]"} for k, r in rungs.items()])))
+rate = [r.success_rate for r in rungs.values()]  # discs, first sights told, every disc told, seen exactly, reference
+parts = {"the motion of its first sights": rate[1] - rate[0],
+         "the motion of the discs it had tracked": rate[2] - rate[1],
+         "what its map remembers of the cylinders it has seen, and where": rate[3] - rate[2],
+         "its search against the oracle's": rate[4] - rate[3]}
+top = max(parts, key=parts.get)
+display(Markdown(
+    f"On {N_TUNE} tuning worlds the disc planner crosses {rate[0]:.1%}. Told the true motion of its first "
+    f"sights alone it crosses {rate[1]:.1%}; of every disc, {rate[2]:.1%}; handed every cylinder seen so far, "
+    f"exactly, {rate[3]:.1%}; the reference that knows as much and searches as the oracle does, {rate[4]:.1%}. "
+    + "Step by step, in points of success: " + "; ".join(f"{k}, {100 * v:+.1f}" for k, v in parts.items())
+    + f". The largest step is {top}"
+    + (": one image shows where a cylinder is, not where it goes (`benchmarks/exp_moving_first_sight.py` "
+       "measures what a network reading the previous image adds to the arrivals rule)."
+       if top == "the motion of its first sights" else ".")
+    + " (Finer rungs, on 300 tuning worlds: `python benchmarks/exp_moving_ladder.py --planners discs`.)"))
 
 # %% [markdown]
 # ## How the moving-trained student fails

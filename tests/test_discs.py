@@ -195,3 +195,43 @@ def test_references_that_know_only_what_images_showed_ignore_a_hidden_cylinder()
                     assert _first_move(reference, sim, world) == _first_move(reference, sim, without)
                 return
     pytest.fail("no world of the test set has a hidden cylinder that changes the oracle's first move")
+
+
+def test_the_told_disc_planner_is_told_exactly_what_its_rule_gives(monkeypatch):
+    """Chapter 10's ladder: the moving disc planner's map told the truth. Told every cylinder seen, its
+    map holds exactly the cylinders the first image rendered, where they are, with their true motion
+    (no other); told every disc's motion, or its first sights' (here the discs of pieces tracked once),
+    each such disc on a cylinder walks with that cylinder's true velocity."""
+    from husky_course.config import with_world
+    from husky_course.planners.base import episode_start
+    from husky_course.planners.reference import TOLD_RULES, ToldDiscsPlanner, truth_in_frame
+
+    monkeypatch.setattr("husky_course.training.discs.load_discs", lambda profile: (_net(), None, ""))
+    moving = with_world(QUICK, "moving")
+    sim = FastSimulator(moving.sim)
+    for seed in eval_world_seeds(40, TEST_SET):
+        world = sim.load(int(seed))
+        seen = sim.visible_obstacles(world.start, 0.0)
+        if (world.speeds[seen] != 0).any() and len(seen) < len(world.obstacles):
+            break
+    else:
+        pytest.fail("no world of the test set shows a walking cylinder in its first image")
+    cyl, velocity = truth_in_frame(world, world.start, 0.0)
+    assert (velocity[seen] != 0).any()
+    obs = sim.depth(world.start[None], 0)[0]
+    for rule in TOLD_RULES[::-1]:
+        planner = ToldDiscsPlanner(QUICK, rule)
+        planner.reset(episode_start(planner, sim, int(seed), world.start.copy(), moving.sim.max_primitives))
+        planner.act(obs, world.start.copy())
+        m = planner.map
+        if rule == TOLD_RULES[2]:
+            np.testing.assert_allclose(m.discs, cyl[np.sort(seen)])
+            np.testing.assert_allclose(m.speeds, velocity[np.sort(seen)])
+            continue
+        gap = np.hypot(m.discs[:, :1] - cyl[:, 0], m.discs[:, 1:2] - cyl[:, 1]) - cyl[:, 2]
+        told = (gap.min(1) < 0.3) & (m.fresh | (rule == TOLD_RULES[1]))  # a first sight: a piece tracked once
+        assert (velocity[gap.argmin(1)][told] != 0).any()  # some told disc walks: the check can fail
+        np.testing.assert_allclose(m.speeds[told], velocity[gap.argmin(1)][told])
+        np.testing.assert_array_equal(m.speeds[~told & (gap.min(1) >= 0.3)], 0.0)  # on no cylinder: stands
+    with pytest.raises(ValueError, match="rule must be one of"):
+        ToldDiscsPlanner(QUICK, "every secret")

@@ -20,11 +20,18 @@ searches over (``benchmarks/exp_static_ladder.py`` runs it on 1,000 tuning world
 
 Rungs 5 to 7 are references, not bounds on camera-based planners: each is optimistic about space
 no image has shown, which a learned planner need not be.
+
+Chapter 10's ladder (:func:`moving_ladder`) climbs from the moving course's disc planner, as it is,
+through its own map told more and more of the truth
+(:class:`~husky_course.planners.reference.ToldDiscsPlanner`: its first sights' motion, every disc's
+motion, every cylinder seen so far exactly) to the perfect-perception reference that knows what
+the last rung knows and plans with the oracle's search (``benchmarks/exp_moving_ladder.py`` splits
+the rungs finer, on 300 tuning worlds).
 """
 
 from __future__ import annotations
 
-from ..config import Profile
+from ..config import Profile, with_world
 from ..planners.base import Planner
 from ..planners.registry import make_planner
 
@@ -42,3 +49,15 @@ def static_ladder(profile: Profile) -> list[tuple[str, Planner]]:
         ("seen so far", make_planner("seen-so-far")),
         ("oracle", make_planner("oracle")),
     ]
+
+
+def moving_ladder(profile: Profile) -> list[tuple[str, Planner]]:
+    """Chapter 10's rungs ``(name, planner)`` on the moving course, in order (module docstring);
+    loads the disc network, never trains it."""
+    from ..planners.reference import TOLD_RULES
+
+    moving = with_world(profile, "moving")
+    told = [(f"discs, told {rule}", make_planner("told-discs", profile=moving, rule=rule, config=moving.sim))
+            for rule in TOLD_RULES]
+    return [("discs", make_planner("discs", profile=moving, config=moving.sim)), *told,
+            ("seen so far, with motion", make_planner("seen-motion"))]

@@ -26,6 +26,12 @@ second image on, as a planner reading motion off images must.
 network replaced by the truth: each piece of a scan read as the cylinder most of its columns hit,
 exactly (walls stay scan points). Against the disc planner it measures what the network's errors
 cost; against "seen so far", what the disc map's own rules cost (chapter 8's ladder).
+
+:class:`ToldDiscsPlanner` is the moving course's disc planner (its network, its map, its search)
+whose walking map is *told* the truth, as much as its ``rule`` gives away (chapter 10's ladder,
+:data:`TOLD_RULES`): the true velocity of its first sights, of every disc, or every cylinder any
+image has rendered so far, exactly. Against the disc planner it measures what its motion estimates
+and its memory cost.
 """
 
 from __future__ import annotations
@@ -40,7 +46,13 @@ from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 from ..sim.world import World
 from .base import EpisodeStart, Planner, search_start
-from .discs import DiscMap, DiscPlanner, majority_cylinder
+from .discs import DiscMap, DiscPlanner, DiscTrackingPlanner, WalkingDiscMap, majority_cylinder
+
+#: What :class:`ToldDiscsPlanner`'s map is told: the true velocity of the discs its tracks call a first
+#: sight; of every disc; or, every step, every cylinder an image has rendered so far, exactly, with
+#: its true velocity (the knowledge of :class:`SeenMotionPlanner`, planned by the disc planner's search).
+TOLD_RULES = ("first sights' motion", "every disc's motion", "every cylinder seen, exactly")
+ON_CYLINDER = 0.3  #: a disc within this of a cylinder's surface is on it (m)
 
 
 class _Reference(Planner):
@@ -241,3 +253,82 @@ class TrueDiscsPlanner(DiscPlanner):
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
         self.map.pose = np.asarray(pose, float)  # type: ignore[attr-defined]
         return super().act(obs, pose)
+
+
+def truth_in_frame(world: World, pose: np.ndarray, time: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(cylinders (n, 3), velocity (n,))``: every cylinder's ``(x, y, r)`` in the robot's frame at
+    ``pose`` and ``time``, and its lateral velocity in that frame over the next step (m per step)."""
+    now, later = world.obstacles_at(time), world.obstacles_at(time + 1.0)
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    rx = c * (now[:, 0] - pose[0]) + s * (now[:, 1] - pose[1])
+    ry = -s * (now[:, 0] - pose[0]) + c * (now[:, 1] - pose[1])
+    vy = -s * (later[:, 0] - now[:, 0]) + c * (later[:, 1] - now[:, 1])
+    return np.c_[rx, ry, now[:, 2]], vy
+
+
+class _ToldMap(WalkingDiscMap):
+    """A :class:`~husky_course.planners.discs.WalkingDiscMap` told the truth as ``rule`` allows."""
+
+    rule: str
+    eyes: FastSimulator
+    pose: np.ndarray
+    time: float
+    seen: np.ndarray  #: the cylinders any image so far (this one included) has rendered
+
+    def add(self, obs: np.ndarray) -> None:
+        super().add(obs)
+        assert self.eyes.world is not None
+        cyl, vy = truth_in_frame(self.eyes.world, self.pose, self.time)
+        if self.rule == TOLD_RULES[2]:
+            self.discs, self.speeds = cyl[self.seen], vy[self.seen]
+            self.fresh = np.zeros(len(self.seen), bool)
+            return
+        if not len(self.discs):
+            return
+        gap = np.hypot(self.discs[:, :1] - cyl[:, 0], self.discs[:, 1:2] - cyl[:, 1]) - cyl[:, 2]
+        j = np.argmin(gap, axis=1)
+        truth = np.where(gap[np.arange(len(j)), j] < ON_CYLINDER, vy[j], 0.0)
+        self.speeds = np.where(self.fresh | (self.rule == TOLD_RULES[1]), truth, self.speeds)
+
+
+class ToldDiscsPlanner(DiscTrackingPlanner):
+    """The moving disc planner whose map is told the truth by ``rule`` (:data:`TOLD_RULES`; module
+    docstring). Privileged, the moving course: an analysis tool, never a candidate. ``profile``
+    (default: :func:`~husky_course.config.get_profile`'s) gives its trained network (loaded, never
+    trained) and settings; ``config``, the course (default: that profile's moving course)."""
+
+    privileged = True
+
+    def __init__(self, profile=None, rule: str = TOLD_RULES[0], config=None) -> None:
+        from ..config import get_profile, with_world
+        from ..training.discs import load_discs  # the trained network (torch)
+
+        if rule not in TOLD_RULES:
+            raise ValueError(f"rule must be one of {TOLD_RULES}, got {rule!r}")
+        profile = profile or get_profile()
+        d = profile.discs
+        super().__init__(load_discs(profile)[0], config or with_world(profile, "moving").sim, grow=d.grow,
+                         unexplained=d.unexplained, margin=d.margin)
+        self.map.__class__ = _ToldMap
+        self.map.rule = rule  # type: ignore[attr-defined]
+        self.name = f"discs, told {rule} (privileged)"
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        if start.sim is None or start.sim.world is None:
+            raise RuntimeError("ToldDiscsPlanner is privileged: run it with run_episode")
+        m = self.map
+        m.eyes = FastSimulator(start.sim.config)  # type: ignore[attr-defined]
+        m.eyes.load(start.sim.world)  # type: ignore[attr-defined]
+        m.time, m.seen = 0.0, np.zeros(0, int)  # type: ignore[attr-defined]
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        m = self.map
+        m.pose = np.asarray(pose, float)  # type: ignore[attr-defined]
+        now = m.eyes.visible_obstacles(m.pose, m.time)  # type: ignore[attr-defined]
+        m.seen = np.union1d(m.seen, now).astype(int)  # type: ignore[attr-defined]
+        return super().act(obs, pose)
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        super().observe(action, obs_next)
+        self.map.time += 1.0  # type: ignore[attr-defined]

@@ -52,6 +52,7 @@ _REFERENCES: dict[str, tuple[str, dict[str, Any]]] = {
     "second-look": ("SecondLookPlanner", {}),
     "snapshot": ("SnapshotPlanner", {}),
     "true-discs": ("TrueDiscsPlanner", {}),
+    "told-discs": ("ToldDiscsPlanner", {}),
 }
 REFERENCE_PLANNERS = tuple(_REFERENCES)
 
