@@ -90,15 +90,10 @@ class FirstSightMap(WalkingDiscMap):
         self.net, self.threshold, self.reid = net, float(threshold), float(reid)
         self.recorded: list[tuple[np.ndarray, np.ndarray]] = []
 
-    def add(self, obs: np.ndarray) -> None:  # WalkingDiscMap.add, with the two readings
-        d, cols, pts, pieces = self.reader.pieces(obs)
-        v = self.motion.update(pts)
-        fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
-        discs, cyl, other = self.decode(d, cols, pts, pieces)
-        speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
-        first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
-        rule = self.arrivals.speeds(discs)
-        speed = np.where(first, rule, speed)
+    def first_sights(self, discs: np.ndarray, cyl: np.ndarray, speed: np.ndarray,
+                     first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rule = self.arrivals.speeds(discs)  # the arrivals rule (the course's reading), then this one's
+        speed, first = np.where(first, rule, speed), first.copy()
         sel = np.flatnonzero(first & cyl)
         features = evidence(self.arrivals, discs[sel])
         self.recorded = [(discs[sel].copy(), features)]
@@ -114,10 +109,7 @@ class FirstSightMap(WalkingDiscMap):
                 gap = np.where(known, np.hypot(*(self.discs[:, :2] - discs[i, :2]).T), np.inf)
                 if gap.min() < self.reid:
                     speed[i], first[i] = self.speeds[int(np.argmin(gap))], False
-        self.arrivals.remember(d)
-        kept = self._merge(obs, d, discs[cyl], other)
-        self.speeds = np.r_[speed[cyl], self.speeds[kept]]
-        self.fresh = np.r_[first[cyl], self.fresh[kept]]
+        return speed, first
 
 
 def examples(task: tuple[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -312,12 +312,21 @@ class WalkingDiscMap(DiscMap):
         discs, cyl, other = self.decode(d, cols, pts, pieces)
         speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
         first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
-        if self.arrive:  # a first sight where the last image saw free space walked in
-            speed = np.where(first, self.arrivals.speeds(discs), speed)
+        speed, first = self.first_sights(discs, cyl, speed, first)
         self.arrivals.remember(d)
         kept = self._merge(obs, d, discs[cyl], other)
         self.speeds = np.r_[speed[cyl], self.speeds[kept]]
         self.fresh = np.r_[first[cyl], self.fresh[kept]]
+
+    def first_sights(self, discs: np.ndarray, cyl: np.ndarray, speed: np.ndarray,
+                     first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(speed, first)`` per piece of an image, its first sights read (``discs (n, 3)`` its
+        discs, ``cyl`` which are cylinders, ``first`` which its tracks see for the first time): with
+        ``arrivals``, a first sight where the last image saw free space walked in. The previous image
+        is still :attr:`arrivals`' (an experiment may read first sights its own way here)."""
+        if self.arrive:
+            speed = np.where(first, self.arrivals.speeds(discs), speed)
+        return speed, first
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         self.arrivals.move(dx, dy)
