@@ -178,6 +178,13 @@ display(Markdown(
 # into free space; when every guess left walks one way, it gets their mean speed. Otherwise it is
 # taken as standing until the next image. The planners without learning (`tracking`) and with
 # learned discs (`discs`) both use this rule; the memory student reads *seen once* instead.
+# The episode's first decision has no earlier image at all: every cylinder in view is a first
+# sight, and no planner that reads motion off its own images can know yet which of them walk.
+# `benchmarks/exp_moving_start.py` counts the failures already lost there, and measures two ways
+# around it on the tuning set: drawing the course's rule of motion for those cylinders many times
+# and taking the first primitive that survives longest on average (the setting `first_samples`,
+# within the course's rules), and a look before the start, while the robot stands on the start
+# line (a change of the course's rules, not a planner).
 # `benchmarks/exp_moving_tracker.py` measures the estimate against the truth, and
 # `benchmarks/exp_moving_ladder.py` how far each planner would get if its map were told the true
 # motion, rung by rung (where its tracks know it, from a cylinder's second image on, always).

@@ -88,6 +88,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 moving tuning worlds \({TUNING}\)[\s\S]*discs, velocities first sight, never seen +\d\.\d{{3}}"
         r"[\s\S]*90% of the oracle \(the goal\) +\d\.\d{3}",
     ),
+    "exp_moving_start.py": (
+        ["--profile", "quick", "--worlds", "3", "--looks", "0,1", "--planners", "tracking"],
+        rf"3 worlds of {TUNING}[\s\S]*tracking +looks before the start: 0 +\d\.\d{{3}} [\s\S]*already fatal"
+        r"[\s\S]*tracking +looks before the start: 1 +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
+    ),
     "exp_moving_student.py": (
         ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
          "--eval-worlds", "3", "--store", "{tmp}"],

@@ -348,3 +348,54 @@ def test_hedged_choice_reads_safe_steps_off_the_ranking_and_stays_off_the_static
     plain, hedged = ([run_episode(make_planner("tracking", config=QUICK.sim, hedge=h), sim, int(s)).actions
                       for s in eval_world_seeds(4, 1)] for h in (False, True))
     assert plain == hedged
+
+
+@pytest.mark.parametrize("name", ["tracking", "discs"])
+def test_first_decision_samples_the_motion_model_for_its_first_sights_and_only_there(name):
+    """With ``first_samples``, the episode's first decision (one image: every first sight doubtful) draws
+    that many motions of the doubtful pieces from the course's motion model (each stands, or walks at
+    a speed in ``speed_range``, all its points as one; every other point keeps its own velocity) and
+    takes the first primitive whose plans survive the most steps on average; no later decision samples,
+    the draws come from the episode's own number, and on the static course nothing is doubtful, so it
+    is the plain tracker. The disc planner (quick network) samples its doubtful discs the same way."""
+    sim, samples = FastSimulator(MOVING.sim), 8
+    extra = {"profile": QUICK} if name == "discs" else {}
+    lo, hi = MOVING.sim.world.speed_range
+    with pytest.raises(ValueError, match="first_samples"):
+        make_planner(name, config=MOVING.sim, first_samples=-1, **extra)
+    checked = 0
+    for seed in eval_world_seeds(6, 1):
+        planner = make_planner(name, config=MOVING.sim, first_samples=samples, **extra)
+        calls: list[tuple[np.ndarray, np.ndarray]] = []
+        hypothesis = planner._hypothesis
+
+        def record(horizon, speed, hypothesis=hypothesis, calls=calls, planner=planner):
+            steps = hypothesis(horizon, speed)
+            doubtful, speed = planner.doubtful, np.broadcast_to(speed, planner.doubtful.shape)
+            assert (speed[~doubtful] == 0).all()  # only the doubtful points' velocities are drawn
+            p, v = planner.points[doubtful], speed[doubtful]
+            near = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1]) < 0.1
+            assert (v[:, None] == v[None, :])[near].all()  # one piece (a cylinder's points) walks as one
+            calls.append((speed.copy(), steps))
+            return steps
+
+        planner._hypothesis = record
+        episode = run_episode(planner, sim, int(seed))
+        if not calls:
+            continue
+        assert len(calls) == samples  # the first decision only
+        speeds = np.array([s for s, _ in calls])
+        walking = np.abs(speeds[speeds != 0])
+        assert ((walking >= lo - 1e-9) & (walking <= hi + 1e-9)).all()
+        mean = np.mean([steps for _, steps in calls], axis=0)
+        assert mean[episode.actions[0]] == mean.max()
+        again = make_planner(name, config=MOVING.sim, first_samples=samples, **extra)
+        assert run_episode(again, sim, int(seed)).actions == episode.actions  # the same draws
+        checked += 1
+    assert checked >= 3
+    if name == "discs":
+        return
+    static = FastSimulator(QUICK.sim)
+    plain, sampled = ([run_episode(make_planner("tracking", config=QUICK.sim, first_samples=n), static,
+                                   int(s)).actions for s in eval_world_seeds(4, 1)] for n in (0, samples))
+    assert plain == sampled

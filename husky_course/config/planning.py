@@ -101,3 +101,10 @@ class ArrivalsConfig:
     #: changed nothing measurable: the tracker 0.740 / 0.733, the disc planner 0.777 / 0.777 (10 worlds
     #: of 300 decided differently each), at about three times the time per decision.
     hedge: bool = False
+    #: at the episode's first decision (one image: every first sight in view doubtful), choose the first
+    #: primitive by its mean safe steps over this many draws of the course's motion model for the
+    #: doubtful pieces (``TrackingPlanner._decide``; 0: off). Off: on 1,000 moving tuning worlds (full
+    #: profile, ``benchmarks/exp_moving_start.py --worlds 1000``) the disc planner crossed 0.770 off,
+    #: 0.778 / 0.771 with 16 / 32 draws (worlds won only with / only without: 15 / 7, 21 / 20), the
+    #: tracker 0.735 off, 0.728 with 16. A first prototype's 0.784 (20 / 6) came from its own draws.
+    first_samples: int = 0

@@ -370,16 +370,17 @@ class DiscTrackingPlanner(DiscPlanner):
 
     name = "discs"
     _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
+    _hypothesis = TrackingPlanner._hypothesis
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
                  doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
-                 **kwargs: float) -> None:
+                 first_samples: int = ArrivalsConfig.first_samples, **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
-        _set_doubt(self, doubt_steps, doubt_hard, hedge)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
 
     @property
     def doubtful(self) -> np.ndarray:

@@ -229,7 +229,8 @@ class MappingPlanner(Planner):
         # built (once per process and library) before the first decision, wide enough for any point
         # of up to TABLE_RADIUS; a wider point gets a wider table when it comes
         self._table = path_table(start.library, self.resolution, self._reach + TABLE_RADIUS, self._digest)
-        self._remaining = start.max_primitives
+        self._remaining = self._length = start.max_primitives
+        self._key = start.key  # the episode's number, for a planner's own randomness
 
     def _grid(self, points: np.ndarray, horizon: int) -> ClearanceGrid:
         """The clearance grid of ``points`` ``(m, 3)`` over what a ``horizon``-step plan can reach.

@@ -49,10 +49,10 @@ class TrackingPlanner(MappingPlanner):
     def __init__(self, config: SimConfig | None = None, horizon: int = MappingConfig.horizon,
                  arrivals: bool = True, doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
-                 **kwargs: float) -> None:
+                 first_samples: int = ArrivalsConfig.first_samples, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
-        _set_doubt(self, doubt_steps, doubt_hard, hedge)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
 
     @property
     def velocity(self) -> np.ndarray:
@@ -73,7 +73,7 @@ class TrackingPlanner(MappingPlanner):
         ``doubt_hard`` an edge that enters it is infeasible. With nothing walking or doubtful this
         is the mapping planner's check, number for number."""
         speeds = self.velocity
-        if self._doubt_speed:  # a hypothesis of :meth:`_decide`: every doubtful point walks at this speed
+        if self._doubt_speed is not None:  # a hypothesis of :meth:`_decide` for the doubtful points
             speeds = np.where(self.doubtful, self._doubt_speed, speeds)
         walking = speeds != 0
         points, reach = self.points, self._reach
@@ -109,24 +109,53 @@ class TrackingPlanner(MappingPlanner):
         return check
 
     def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
-        """The mapping planner's choice; with ``hedge``, the first primitive whose plans survive the most
-        steps in expectation over three hypotheses for the doubtful points (all standing, all
-        walking left, all walking right at the course's mean speed), weighted by the course's share
-        of walking cylinders; ties go to the standing hypothesis's rank."""
+        """The mapping planner's choice, but at the episode's first decision (with ``first_samples``)
+        and with ``hedge`` the first primitive is chosen over hypotheses for the doubtful points.
+
+        * ``first_samples``: the first decision has one image, so every cylinder in view is a first
+          sight the arrivals rule cannot judge. Each of ``first_samples`` samples draws, for every
+          doubtful piece on its own (points closer than 0.3 m to one another: one disc, or one
+          cylinder's scan points), the course's motion model (it walks with the course's share of
+          walking cylinders, either way, at a speed uniform in ``speed_range``); the first primitive
+          whose plans survive the most steps on average over the samples wins, ties going to the
+          standing hypothesis's rank. Samples are drawn from the episode's own number.
+        * ``hedge`` (every decision): the expectation over three hypotheses for all doubtful points
+          at once (all standing, all walking left, all walking right at the course's mean speed),
+          weighted by the course's share of walking cylinders.
+        """
         choice, keys = MappingPlanner._decide(self, horizon)
         walks = float(getattr(self.config.world, "moving_fraction", 0.0))
-        if not self.hedge or not walks or not self.doubtful.any():
+        doubtful = self.doubtful
+        if not walks or not doubtful.any():
             return choice, keys
         lo, hi = self.config.world.speed_range  # type: ignore[attr-defined]
+        if self.first_samples and self._remaining == self._length:
+            rng, piece = np.random.default_rng(self._key), _pieces(self.points[doubtful])
+            total, n = np.zeros(len(keys)), int(piece.max()) + 1
+            for _ in range(self.first_samples):
+                speed = np.zeros(len(doubtful))
+                walking = rng.random(n) < walks
+                speed[doubtful] = (walking * rng.choice((-1.0, 1.0), n) * rng.uniform(lo, hi, n))[piece]
+                total += self._hypothesis(horizon, speed)
+            mean = np.round(total / self.first_samples, 6)
+            ranked = np.where(keys > -1e8, mean * 1e8 + keys, keys)  # the mean first, then the rank
+            return int(np.argmax(ranked)), ranked
+        if not self.hedge:
+            return choice, keys
         expected = (1 - walks) * _steps(keys)
         for speed in (-(lo + hi) / 2, (lo + hi) / 2):
-            self._doubt_speed = speed
-            try:
-                expected = expected + walks / 2 * _steps(MappingPlanner._decide(self, horizon)[1])
-            finally:
-                self._doubt_speed = 0.0
+            expected = expected + walks / 2 * self._hypothesis(horizon, speed)
         hedged = np.where(keys > -1e8, expected * 1e6 + (keys - _steps(keys) * 1e6), keys)
         return int(np.argmax(hedged)), hedged
+
+    def _hypothesis(self, horizon: int, speed: float | np.ndarray) -> np.ndarray:
+        """Safe steps of each first primitive's best plan if the doubtful points walk at ``speed``
+        (one number, or one per map point)."""
+        self._doubt_speed = speed
+        try:
+            return _steps(MappingPlanner._decide(self, horizon)[1])
+        finally:
+            self._doubt_speed = None
 
 
 def _steps(keys: np.ndarray) -> np.ndarray:
@@ -135,8 +164,25 @@ def _steps(keys: np.ndarray) -> np.ndarray:
     return np.where(keys > -1e8, np.floor((keys + 5e5) / 1e6), 0.0)
 
 
-def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool) -> None:
+def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
+    """Which piece ``(m,)`` (numbered from 0) each of ``points (m, 2+)`` belongs to: chains of points
+    closer than ``gap`` to one another."""
+    p = np.asarray(points, float)[:, :2]
+    close = np.hypot(p[:, None, 0] - p[None, :, 0], p[:, None, 1] - p[None, :, 1]) < gap
+    label = np.arange(len(p))
+    while True:  # each point takes the smallest label among its neighbours until none changes
+        new = np.where(close, label[None, :], len(p)).min(1)
+        if (new == label).all():
+            return np.unique(label, return_inverse=True)[1]
+        label = new
+
+
+def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool,
+               first_samples: int) -> None:
     """The settings for first sights the arrivals rule leaves standing (:class:`ArrivalsConfig`)."""
     planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
+    if int(first_samples) != first_samples or first_samples < 0:
+        raise ValueError(f"first_samples must be a whole number >= 0, got {first_samples!r}")
+    planner.first_samples = int(first_samples)
     planner.max_walk = float(getattr(planner.config.world, "speed_range", (0.0, 0.0))[1])
-    planner._doubt_speed = 0.0
+    planner._doubt_speed: float | np.ndarray | None = None
