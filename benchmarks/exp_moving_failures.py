@@ -1,7 +1,7 @@
 """Experiment: where do the moving course's camera-based planners fail, and what did they know?
 
 Run: ``python benchmarks/exp_moving_failures.py [--profile full] [--worlds 200]
-[--planner tracking|memory|discs]``.
+[--planner tracking|memory|discs] [--told RULE]``.
 
 On the tuning set (evaluation set 1) of the moving course. For every episode that ends in a
 collision on a world the oracle crosses, it finds the **fatal decision**: the last step from
@@ -22,6 +22,15 @@ planner, the disc planner and the moving-trained student keep the same ones):
 
 Printed: the success rate and the failures per kind. What the student would gain from better
 motion estimates is in the first four; the last is the planner's own precision.
+
+The disc planner's failures are also split by what its **disc map** held of that cylinder at the
+fatal decision (a disc within 0.3 m of its surface, ``ON_CYLINDER``): a disc, read as a first
+sight or tracked, standing or walking, its velocity right or wrong (within 0.1 m per step); no
+disc any more, because an image saw through its place, a new disc landed on it, or it drifted off
+the cylinder (a wrong velocity) or fell behind; or never a disc, with the map's scan points on it
+(the network read it as a wall) or nothing. ``--told RULE`` runs the privileged ``told-discs``
+reference instead (:data:`~husky_course.planners.reference.TOLD_RULES`), to see what is left once
+its map is told that much of the truth.
 """
 
 from __future__ import annotations
@@ -34,7 +43,9 @@ import numpy as np
 
 from husky_course.config import CameraConfig, OracleConfig, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.planners.base import episode_start
+from husky_course.planners.base import Planner, episode_start
+from husky_course.planners.discs import WalkingDiscMap
+from husky_course.planners.reference import ON_CYLINDER, TOLD_RULES, truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import expand, survival
@@ -70,21 +81,77 @@ def kind(world: World, j: int, t: int, pose: np.ndarray, first_seen: int | None,
     return "motion read right" if abs(v - truth) < 0.1 else "motion read wrong"
 
 
+def surface_gap(points: np.ndarray, cylinder: np.ndarray) -> np.ndarray:
+    """Distance ``(m,)`` from each of ``points (m, 2+)`` to the surface of ``cylinder (x, y, r)``."""
+    return np.hypot(points[:, 0] - cylinder[0], points[:, 1] - cylinder[1]) - cylinder[2]
+
+
+def map_knew(log: list, j: int, fatal: int, world: World) -> str:
+    """What the disc map held of cylinder ``j`` at step ``fatal``, from ``log`` (per step: the pose,
+    the map's discs, speeds and first-sight marks, its scan points, and the discs each rule dropped)."""
+    pose, discs, speeds, fresh, walls, _ = log[fatal]
+    cyl, vy = truth_in_frame(world, pose, float(fatal))
+    near = np.flatnonzero(surface_gap(discs, cyl[j]) < ON_CYLINDER)
+    if len(near):
+        i = near[0]
+        right = "right" if abs(speeds[i] - vy[j]) <= 0.1 else "wrong"
+        return (f"a disc, {'first sight' if fresh[i] else 'tracked'}, "
+                f"{'walking' if speeds[i] else 'standing'}, {right}")
+
+    def on(discs: np.ndarray, at: np.ndarray) -> bool:
+        return bool((surface_gap(discs, at[j]) < ON_CYLINDER).any())
+
+    for step in range(fatal, -1, -1):  # back in time: the last moment the map lost a disc on it, and why
+        at = truth_in_frame(world, log[step][0], float(step))[0]
+        if step < fatal and on(log[step][1], at):  # held after this step's image: lost between images
+            return "no disc any more: drifted off, or fell behind"
+        for why, lost in log[step][5].items():  # dropped when this step's image came
+            if on(lost, at):
+                return f"no disc any more: {why}"
+    points = bool((surface_gap(walls, cyl[j]) < 0.15).any())
+    return "never a disc, " + ("scan points on it" if points else "nothing on it")
+
+
+def recording(planner: Planner) -> list:
+    """Make ``planner``'s disc map record, per :meth:`~husky_course.planners.discs.DiscMap.add`, the
+    remembered discs its rules drop; returns the list each step's drops are appended to."""
+    drops: list = []
+    base = type(planner.map)  # type: ignore[attr-defined]
+
+    class Recorded(base):  # type: ignore[misc, valid-type]
+        def forgotten(self, d: np.ndarray, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            seen, landed = super().forgotten(d, new)
+            lost = {"seen through": seen, "a new disc landed on it": landed & ~seen}
+            drops.append({why: self.discs[mask] for why, mask in lost.items()})
+            return seen, landed
+
+    planner.map.__class__ = Recorded  # type: ignore[attr-defined]
+    return drops
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
     parser.add_argument("--worlds", type=int, default=200)
     parser.add_argument("--planner", default="tracking", choices=("tracking", "memory", "discs"))
+    parser.add_argument("--told", choices=TOLD_RULES, help="the disc planner told this much (privileged)")
     args = parser.parse_args()
+    if args.told and args.planner != "discs":
+        parser.error("--told needs --planner discs")
     profile = with_world(get_profile(args.profile), "moving")
     sim, limit = FastSimulator(profile.sim), profile.sim.max_primitives
     if args.planner == "tracking":
         planner = make_planner("tracking", config=profile.sim)
+    elif args.told:
+        planner = make_planner("told-discs", profile=profile, rule=args.told, config=profile.sim)
     elif args.planner == "discs":  # its discs walk on the course it is given
         planner = make_planner("discs", profile=profile, config=profile.sim)
     else:
         planner = make_planner("memory", profile=profile)
+    disc_map = isinstance(planner.map, WalkingDiscMap)  # type: ignore[attr-defined]
+    drops = recording(planner) if disc_map else []
     failures: Counter[str] = Counter()
+    held: Counter[str] = Counter()  # the disc planner's: what its map held of the cylinder it hit
     successes = 0
     for seed in eval_world_seeds(args.worlds, 1):
         world = sim.load(int(seed))
@@ -92,11 +159,16 @@ def main() -> None:
         planner.reset(episode_start(planner, sim, int(seed), pose, limit))
         first: dict[int, int] = {}
         known: list[tuple[np.ndarray, list]] = []  # per step: the pose, the planner's tracks
+        log: list = []  # the disc planner's map, per step (map_knew)
         obs = sim.depth(pose[None])[0]
         for step in range(limit):
             for j in sim.visible_obstacles(pose, float(step)).tolist():
                 first.setdefault(j, step)
-            action = planner.act(obs)
+            action = planner.act(obs, pose.copy() if planner.privileged else None)
+            if disc_map:
+                m = planner.map  # type: ignore[attr-defined]
+                log.append((pose.copy(), m.discs.copy(), m.speeds.copy(), m.fresh.copy(),
+                            m.walls.points.copy(), drops[-1]))
             tracks = planner.map.motion.tracks  # type: ignore[attr-defined]
             lines = [(tracks.line(t), float(np.average(t[:, 1], weights=t[:, 3] ** -2.0)), len(t))
                      for t in tracks.tracks]
@@ -116,6 +188,10 @@ def main() -> None:
                     break
                 fatal = max(s for s in range(step + 1) if crossable(sim, world, known[s][0], s, limit - s))
                 failures[kind(world, j, fatal, known[fatal][0], first.get(j), known[fatal][1])] += 1
+                if disc_map:
+                    seen = first.get(j) is not None and first[j] <= fatal
+                    walker = "walking" if world.speeds[j] != 0 else "standing"
+                    held[f"{walker}: " + (map_knew(log, j, fatal, world) if seen else "unseen")] += 1
                 break
             pose = result.pose
             obs = sim.depth(pose[None], step + 1)[0]
@@ -125,6 +201,11 @@ def main() -> None:
     print("failures by what it knew, at the fatal decision, of the cylinder it hit:")
     for name, count in failures.most_common():
         print(f"  {count:4d}  {name}")
+    if disc_map:
+        print("the same failures (but walls and worlds without a way through) by what its disc map held of "
+              "the cylinder it hit:")
+        for name, count in held.most_common():
+            print(f"  {count:4d}  {name}")
 
 
 if __name__ == "__main__":

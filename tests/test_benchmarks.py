@@ -65,7 +65,7 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_failures.py": (
         ["--profile", "quick", "--worlds", "3", "--planner", "discs"],
-        r"discs on 3 moving tuning worlds: success \d\.\d{3}",
+        r"discs on 3 moving tuning worlds: success \d\.\d{3}[\s\S]*by what its disc map held",
     ),
     "exp_moving_first_sight.py": (
         ["--profile", "quick", "--train-worlds", "4", "--worlds", "3", "--epochs", "1", "--workers", "1"],

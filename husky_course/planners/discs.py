@@ -240,23 +240,29 @@ class DiscMap:
     def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
         """Drop the remembered discs ``obs`` sees again or through, or that a new disc lands on, then add
         ``new`` (first) and the ``other`` columns' points; returns which remembered discs were kept."""
-        cam, reader = self.reader.camera, self.reader
-        kept = np.ones(len(self.discs), bool)
-        if len(self.discs):
-            x, y, r = self.discs.T
-            dx = x - cam.mount_forward
-            with np.errstate(divide="ignore", invalid="ignore"):
-                col = (reader.half - y / dx) * cam.size / (2 * reader.half)
-            j = np.floor(np.where(dx > cam.near, col, -1.0) + 0.5).astype(int)
-            in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
-            seen_again = in_view & (dx - r < d[np.minimum(np.maximum(j, 0), cam.size - 1)] + 0.05)
-            if len(new):
-                gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])
-                seen_again |= (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
-            kept = ~seen_again
+        seen, landed = self.forgotten(d, new)
+        kept = ~(seen | landed)
         self.discs = np.concatenate([new, self.discs[kept]])
         self.walls.add(obs, use=other, depth=d)
         return kept
+
+    def forgotten(self, d: np.ndarray, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(seen, landed)`` per remembered disc: the column ``d`` through its centre sees it again or
+        through it (reaches its front), and a disc of ``new`` lands on it (their centres closer than
+        the larger radius); :meth:`add` drops both."""
+        cam, reader = self.reader.camera, self.reader
+        x, y, r = self.discs.T
+        dx = x - cam.mount_forward
+        with np.errstate(divide="ignore", invalid="ignore"):
+            col = (reader.half - y / dx) * cam.size / (2 * reader.half)
+        j = np.floor(np.where(dx > cam.near, col, -1.0) + 0.5).astype(int)
+        in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
+        seen = in_view & (dx - r < d[np.minimum(np.maximum(j, 0), cam.size - 1)] + 0.05)
+        landed = np.zeros(len(x), bool)
+        if len(new):
+            gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])
+            landed = (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
+        return seen, landed
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``; returns which discs
