@@ -258,11 +258,8 @@ class DiscMap:
         j = np.floor(np.where(dx > cam.near, col, -1.0) + 0.5).astype(int)
         in_view = (dx > cam.near) & (j >= 0) & (j < cam.size)
         seen = in_view & (dx - r < d[np.minimum(np.maximum(j, 0), cam.size - 1)] + 0.05)
-        landed = np.zeros(len(x), bool)
-        if len(new):
-            gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])
-            landed = (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
-        return seen, landed
+        gap = np.hypot(x[:, None] - new[None, :, 0], y[:, None] - new[None, :, 1])  # (remembered, new)
+        return seen, (gap < np.maximum(r[:, None], new[None, :, 2])).any(1)
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         """Dead reckoning after a primitive that moved the robot by ``(dx, dy)``; returns which discs
