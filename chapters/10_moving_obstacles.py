@@ -193,6 +193,11 @@ display(Markdown(
 # each point now carrying its velocity and walking on after every step, also when the camera no
 # longer sees it. The **mapping planner with motion** (`tracking`, no learning) plans over it with
 # the space-time lattice search: a walking point is checked where it will be at each sample's time.
+# A walking cylinder turns back at a side wall. The robot does not know where in the course it
+# started, but it sees the walls: the disc planner reads their faces off the points it remembers
+# that line up along the course (`husky_course.planners.walls`), and its walking discs bounce off
+# them, in its map and in its search (`benchmarks/exp_moving_walls.py` compares it with walks in a
+# straight line on the tuning set).
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every

@@ -93,6 +93,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 worlds of {TUNING}[\s\S]*tracking +looks before the start: 0 +\d\.\d{{3}} [\s\S]*already fatal"
         r"[\s\S]*tracking +looks before the start: 1 +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
     ),
+    "exp_moving_walls.py": (
+        ["--profile", "quick", "--worlds", "3", "--skip", "1"],
+        rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*straight +\d\.\d{{3}} [\s\S]*"
+        r"faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
+    ),
     "exp_moving_student.py": (
         ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
          "--eval-worlds", "3", "--store", "{tmp}"],

@@ -34,6 +34,7 @@ from .planning import (
     MappingConfig,
     OracleConfig,
     TrackingConfig,
+    WallsConfig,
 )
 from .sensing import SENSING, SensingConfig, SensingError, get_sensing
 from .sim import (
@@ -55,7 +56,7 @@ __all__ = [
     "DataConfig", "DiscConfig", "EVAL_SEED_BASE", "EvalPlan", "GuaranteeConfig", "HeuristicConfig",
     "MappingConfig", "MemoryConfig", "ModelConfig", "ModelDims", "MovingWorldConfig", "OracleConfig",
     "PROFILES", "PROFILE_ENV", "PrimitiveConfig", "Profile", "SENSING", "SensingConfig", "SensingError",
-    "SimConfig", "TrackingConfig", "TrainConfig",
+    "SimConfig", "TrackingConfig", "TrainConfig", "WallsConfig",
     "TrainingPlan", "WORLD_KINDS", "WorldConfig", "check_profile", "check_profile_name", "check_world_kind",
     "config_hash", "get_profile", "get_sensing", "model_dims", "sim_for_world", "to_dict", "with_sensing",
     "with_world", "world_flag", "world_kind",

@@ -81,6 +81,19 @@ class TrackingConfig:
 
 
 @dataclass(frozen=True)
+class WallsConfig:
+    """Where the moving disc planner places the side walls' faces, so that its walking discs bounce
+    off them (:mod:`husky_course.planners.walls`). Our first choice, not swept; on 2,000 moving tuning
+    worlds (full profile, ``benchmarks/exp_moving_walls.py``) bouncing took the disc planner from
+    0.770 / 0.766 to 0.780 / 0.776 (worlds 0-999 / 1,000-1,999 of evaluation set 1; won only with /
+    only without: 12 / 2, 13 / 3), the same worlds as with the faces told from the true start."""
+
+    beyond: float = 2.5  #: m to the side beyond which a remembered non-cylinder point may be a wall
+    bin: float = 0.1  #: m, the width of the bins of lateral position searched for a face
+    points: int = 5  #: points a bin needs to be a face
+
+
+@dataclass(frozen=True)
 class ArrivalsConfig:
     """First sightings that walked in (:mod:`husky_course.planners.arrivals`), chosen on 300 moving
     tuning worlds (full profile, the disc planner): tolerance 0.08 / 0.15 / 0.25 m gave 0.780 /

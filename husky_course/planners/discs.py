@@ -26,9 +26,8 @@ On the moving course (:class:`DiscTrackingPlanner`) the discs walk with the velo
 tracker reads off successive scans, a first sight that walked into space the last image saw free
 walks too (:mod:`~husky_course.planners.arrivals`: 0.727 without, 0.777 with, on 300 moving tuning
 worlds, full profile; the tracker 0.723 and 0.740), and the search runs in space-time as the
-tracker's does. Tracking the network's centres instead of the tracker's fitted circles (more
-accurate: a median lateral error of 1 cm against 3 cm on 150 unseen worlds) changed nothing
-measurable (0.727 against 0.737 without arrivals): the first sights, not the tracks, are the limit.
+tracker's does. Tracking the network's centres (1 cm median lateral error against the fitted
+circles' 3 cm) changed nothing measurable (0.727 against 0.737 without arrivals).
 ``benchmarks/exp_moving_ladder.py`` splits the gap on 300 moving tuning worlds: told the truth for
 its first sights alone this planner crosses 0.867 (0.777 as it is), for every disc 0.887, and with
 every cylinder seen so far handed to its search exactly 0.940 (the perfect-perception reference:
@@ -38,13 +37,12 @@ difference 300 worlds can show: one image says little of a first sight's motion.
 
 Settings, chosen on 1,000 tuning worlds (full profile; ``exp_static_ladder.py --sweep``; measured
 with the search's former clearance grid, which crossed the same 0.951 of 3,000 tuning worlds as
-the path tables that replaced it, :mod:`~husky_course.planners.mapping`): the
-search's margin 0 (0.02, the mapping planner's, cost about a point); no growth of the predicted
-radii; unexplained points beyond 0.05 m (0.03 / 0.05 / 0.1 / 0.2 / never: 0.946 / 0.948 / 0.947 /
-0.943 / 0.937); the mapping planner's horizon 5 (4: 0.939, 6: 0.948). Twice the training views
-(6,000 worlds) gave 0.947: the network is not short of data. On the moving course a first sight
-widened into standing copies 0.2 or 0.3 m to each side (where it may walk) did not help: 0.710 and
-0.715 against 0.725 on 200 moving tuning worlds.
+the path tables that replaced it, :mod:`~husky_course.planners.mapping`): the search's margin 0
+(0.02 cost about a point); no growth of the radii; unexplained points beyond 0.05 m (0.03 / 0.05 /
+0.1 / 0.2 / never: 0.946 / 0.948 / 0.947 / 0.943 / 0.937); horizon 5 (4: 0.939, 6: 0.948). Twice the
+training views (6,000 worlds) gave 0.947. On the moving course first sights widened into standing
+copies 0.2 / 0.3 m to each side gave 0.710 / 0.715 against 0.725 (200 worlds); walking discs bounce
+off the side walls where it has seen them (:mod:`~husky_course.planners.walls`).
 
 A trained network decides what the search sees, so it is a learned planner; it receives only what
 every unprivileged planner receives (``tests/test_privileged.py``).
@@ -61,6 +59,7 @@ from .mapping import MappingPlanner
 from .motion import MotionMemory, segments
 from .perception import DepthScan, EgoMap
 from .tracking import TrackingPlanner, _set_doubt
+from .walls import NO_WALLS, walk_on, wall_faces
 
 
 class PieceReader:
@@ -278,7 +277,7 @@ class WalkingDiscMap(DiscMap):
     tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's
     points; 0 for a first sight, taken as standing until the next image); after every step a
     remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
-    course every velocity is 0 and it is the :class:`DiscMap`.
+    course every velocity is 0 and it is the :class:`DiscMap`. ``faces``: the walls' (:mod:`.walls`).
     """
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
@@ -288,11 +287,12 @@ class WalkingDiscMap(DiscMap):
         self.arrivals, self.arrive = Arrivals(config or SimConfig()), bool(arrivals)
         self.widen = float(widen)
         self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
+        self.width, self.faces = (config or SimConfig()).world.width, NO_WALLS
 
     def reset(self) -> None:
         super().reset()
         self.motion.reset()
-        self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
+        self.speeds, self.fresh, self.faces = np.empty(0), np.zeros(0, bool), NO_WALLS
         self.arrivals.reset()
 
     @property
@@ -332,10 +332,12 @@ class WalkingDiscMap(DiscMap):
         return speed, first
 
     def move(self, dx: float, dy: float) -> np.ndarray:
+        """Dead reckoning; the walls' faces read again; each disc walks on, bouncing off them."""
         self.arrivals.move(dx, dy)
         kept = super().move(dx, dy)
         self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
-        self.discs[:, 1] += self.speeds
+        self.faces = wall_faces(self.walls.points, self.width, (self.faces[0] - dy, self.faces[1] - dy))
+        self.discs[:, 1], self.speeds = walk_on(self.discs, self.speeds, self.faces)
         self.motion.move(dx, dy)
         return kept
 

@@ -39,6 +39,7 @@ from ..sim.lattice import StartCheck
 from ..sim.world import sample_times
 from .mapping import MappingPlanner
 from .motion import WalkingMap
+from .walls import NO_WALLS, bounced
 
 
 class TrackingPlanner(MappingPlanner):
@@ -85,6 +86,7 @@ class TrackingPlanner(MappingPlanner):
         every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
         x, t = local[:, ::every, 0], sample_times(0.0, local.shape[1])[::every]  # relative to an edge's start
         ahead = (x.min() - reach, x.max() + reach)
+        faces = getattr(self.map, "faces", NO_WALLS)  # the disc planner's; the tracker knows none
 
         def near(p: np.ndarray, x0: float) -> np.ndarray:
             return p[(p[:, 0] > x0 + ahead[0]) & (p[:, 0] < x0 + ahead[1])]
@@ -94,8 +96,8 @@ class TrackingPlanner(MappingPlanner):
             moving, doubted = near(np.c_[movers, speeds], x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
-            for px, py, r, v in moving:  # where it is at each sample's time
-                np.minimum(gap, (np.hypot(X - px, Y - (py + v * T)) - r).min(-1), out=gap)
+            for px, py, r, v in moving:  # where it is at each sample's time (bouncing off known walls)
+                np.minimum(gap, (np.hypot(X - px, Y - bounced(py, v, T, r, faces)) - r).min(-1), out=gap)
             clear = gap - self.radius
             if not len(doubted):
                 return clear < self.margin, clear - self.margin

@@ -1,0 +1,65 @@
+"""The side walls as the moving disc planner knows them: where their faces are, and the walk of a
+cylinder that bounces off them.
+
+A walking cylinder of the moving course reflects off the side walls (a triangle wave in time,
+:meth:`~husky_course.sim.world.World.obstacle_y`). Dead reckoning gives the robot its displacement,
+not its place in the course (the start's ``y`` is unknown to it), so it reads the walls' faces off
+what it has seen: the remembered points no disc explains (:class:`~husky_course.planners.discs.DiscMap`'s
+wall points) that lie further than ``beyond`` to a side and crowd into one ``bin`` of lateral
+position (a wall seen along the course puts many points on one line). The course's width gives the
+other face. Until a face has been seen, nothing bounces (the faces are at infinity).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import WallsConfig
+
+NO_WALLS = (-np.inf, np.inf)
+
+
+def wall_faces(points: np.ndarray, width: float, previous: tuple[float, float] = NO_WALLS,
+               config: WallsConfig | None = None) -> tuple[float, float]:
+    """``(right, left)`` lateral positions of the walls' faces in the robot's frame, read off
+    ``points`` ``(m, 2+)`` (robot frame; see the module), or ``previous`` when no face shows."""
+    cfg = config or WallsConfig()
+    points = np.asarray(points, float).reshape(-1, np.shape(points)[-1] if np.size(points) else 3)
+
+    def face(y: np.ndarray) -> float | None:
+        if len(y) < cfg.points:
+            return None
+        bins = np.round(y / cfg.bin)
+        values, counts = np.unique(bins, return_counts=True)
+        best = int(np.argmax(counts))
+        return float(np.median(y[bins == values[best]])) if counts[best] >= cfg.points else None
+
+    left = face(points[points[:, 1] > cfg.beyond, 1])
+    if left is not None:
+        return left - width, left
+    right = face(points[points[:, 1] < -cfg.beyond, 1])
+    if right is not None:
+        return right, right + width
+    return previous
+
+
+def bounced(y: np.ndarray | float, v: np.ndarray | float, t: np.ndarray | float, r: np.ndarray | float,
+            faces: tuple[float, float]) -> np.ndarray:
+    """Where a cylinder at ``y`` (radius ``r``) walking at ``v`` m per step is after ``t`` steps, reflecting
+    off the faces (a cylinder outside them is first put against the nearer one); standing (``v == 0``)
+    or with no faces known, ``y + v t``. Arrays broadcast together."""
+    y, v, t, r = (np.asarray(a, float) for a in (y, v, t, r))
+    straight = y + v * t
+    if not np.isfinite(faces[0]) or not np.isfinite(faces[1]):
+        return straight
+    low, span = faces[0] + r, np.maximum(faces[1] - faces[0] - 2 * r, 1e-6)
+    u = np.mod(np.clip(y, low, low + span) - low + v * t, 2 * span)
+    return np.where(v == 0, straight, low + span - np.abs(u - span))
+
+
+def walk_on(discs: np.ndarray, v: np.ndarray, faces: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """``(y, v)`` of ``discs`` ``(m, 3)`` walking at ``v`` ``(m,)`` one step on: where :func:`bounced`
+    puts them, and their velocity turned if they bounced."""
+    y, r = discs[:, 1], discs[:, 2]
+    after = bounced(y, v, 1.0, r, faces)
+    return after, np.where(v == 0, v, np.sign(bounced(y, v, 1.001, r, faces) - after) * np.abs(v))

@@ -1,0 +1,103 @@
+"""The side walls as the moving disc planner knows them (:mod:`husky_course.planners.walls`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from husky_course.config import MovingWorldConfig, WallsConfig
+from husky_course.planners.walls import NO_WALLS, bounced, walk_on, wall_faces
+from husky_course.sim.world import make_world
+
+
+def test_a_cylinder_bounces_as_the_course_moves_it() -> None:
+    """In a frame shifted by the robot's unknown ``y``, :func:`bounced` follows the course's own
+    triangle wave (``World.obstacle_y``) for every walking cylinder, many bounces on."""
+    cfg = MovingWorldConfig()
+    world = next(w for w in (make_world(s, cfg) for s in range(50)) if len(w.moving) >= 3)
+    robot_y = 1.3
+    faces = (-world.wall_y - robot_y, world.wall_y - robot_y)
+    t = np.arange(0.0, 40.0, 0.25)
+    for i in world.moving:
+        x, y, r = world.obstacles[i]
+        truth = world.obstacle_y(np.array([i]), t[None])[0] - robot_y
+        y0 = world.obstacle_y(np.array([i]), np.zeros((1, 1)))[0, 0] - robot_y
+        np.testing.assert_allclose(bounced(y0, world.speeds[i], t, r, faces), truth, atol=1e-9)
+
+
+def test_without_faces_or_motion_a_walk_is_straight() -> None:
+    t = np.arange(5.0)
+    np.testing.assert_allclose(bounced(4.0, 0.5, t, 0.3, NO_WALLS), 4.0 + 0.5 * t)
+    np.testing.assert_allclose(bounced(4.0, 0.0, t, 0.3, (-5.0, 5.0)), np.full(5, 4.0))
+
+
+def test_walk_on_turns_a_disc_at_a_face() -> None:
+    discs = np.array([[3.0, 4.5, 0.3], [3.0, 0.0, 0.3], [3.0, -4.0, 0.3]])
+    y, v = walk_on(discs, np.array([0.5, -0.4, 0.0]), (-5.0, 5.0))
+    np.testing.assert_allclose(y, [4.4, -0.4, -4.0])  # 4.5 + 0.5 passes the face at 4.7 by 0.3: 4.4
+    np.testing.assert_allclose(v, [-0.5, -0.4, 0.0])
+
+
+def test_the_faces_are_read_off_a_wall_of_points() -> None:
+    """A line of points along the course beyond ``beyond`` is a face; the width gives the other; a
+    few scattered points are none, and then the previous faces stay."""
+    cfg = WallsConfig()
+    x = np.linspace(1.0, 5.0, 12)
+    left = np.c_[x, np.full(12, 3.62), np.zeros(12)]
+    scattered = np.array([[2.0, 3.0, 0.0], [3.0, -3.4, 0.0], [4.0, -4.1, 0.0], [1.0, 0.5, 0.0]])
+    lo, hi = wall_faces(np.r_[left, scattered], 10.0, config=cfg)
+    assert hi == pytest.approx(3.62) and lo == pytest.approx(3.62 - 10.0)
+    right = np.c_[x, np.full(12, -6.1), np.zeros(12)]
+    assert wall_faces(right, 10.0, config=cfg) == pytest.approx((-6.1, 3.9))
+    assert wall_faces(scattered, 10.0, (-7.0, 3.0), cfg) == (-7.0, 3.0)
+    assert wall_faces(np.empty((0, 3)), 10.0) == NO_WALLS
+    near = np.c_[x, np.full(12, 1.5), np.zeros(12)]  # a line, but not beyond 2.5 m: not a wall
+    assert wall_faces(near, 10.0) == NO_WALLS
+
+
+def _walking_map():
+    import torch
+
+    from husky_course.config import get_profile, with_world
+    from husky_course.models.discs import DiscNet
+    from husky_course.planners.discs import DiscTrackingPlanner
+
+    profile = with_world(get_profile("quick"), "moving")
+    torch.manual_seed(0)
+    planner = DiscTrackingPlanner(DiscNet(profile.sim.world.radius_range).eval(), profile.sim)
+    return planner, planner.map
+
+
+def test_the_disc_map_reads_the_faces_and_its_discs_bounce_off_them() -> None:
+    """After a step the map reads the faces off its wall points (shifted by the robot's own move) and
+    a disc walking into one comes back; with no wall seen, the faces stay where dead reckoning puts them."""
+    planner, disc_map = _walking_map()
+    x = np.linspace(1.0, 5.0, 12)
+    disc_map.walls.points = np.c_[x, np.full(12, 4.0), np.full(12, 0.05)]
+    disc_map.discs = np.array([[3.0, 3.4, 0.3], [3.0, 0.0, 0.3]])
+    disc_map.speeds, disc_map.fresh = np.array([0.5, 0.5]), np.zeros(2, bool)
+    disc_map.move(1.0, 0.2)  # the robot moved 0.2 m left: the wall at 3.8; the disc at 3.2 walks to 3.7, past
+    assert disc_map.faces == pytest.approx((3.8 - 10.0, 3.8))  # its limit 3.5 by 0.2: back to 3.3
+    np.testing.assert_allclose(disc_map.discs[:, 1], [3.3, 0.3], atol=1e-9)
+    np.testing.assert_allclose(disc_map.speeds, [-0.5, 0.5])
+    disc_map.walls.points = np.empty((0, 3))
+    disc_map.move(1.0, -0.5)
+    assert disc_map.faces == pytest.approx((4.3 - 10.0, 4.3))
+
+
+def test_the_search_sees_a_walker_come_back_from_the_wall() -> None:
+    """The space-time check places a walking disc where the bounce puts it: with the faces known, a
+    plan through the place it returns to is blocked later on; without them it is not."""
+    planner, disc_map = _walking_map()
+    from husky_course.planners.base import EpisodeStart
+    from husky_course.sim.primitives import make_library
+
+    library = make_library(planner.config.primitives)
+    planner.reset(EpisodeStart(library=library, max_primitives=planner.config.max_primitives, key=0))
+    disc_map.discs = np.array([[3.0, 1.0, 0.3]])
+    disc_map.speeds, disc_map.fresh = np.array([0.6]), np.zeros(1, bool)
+    x0, y0 = 2.0, np.array([0.0])  # an edge from 2 m ahead, two steps from now: the disc is at 2.2 straight
+    straight = planner._start_check()(x0, y0, 2.0)[1]
+    disc_map.faces = (-10.0 + 1.6, 1.6)  # the face 1.6 m to the left: it turned back at 1.3
+    back = planner._start_check()(x0, y0, 2.0)[1]
+    assert (back < straight - 0.2).any()
