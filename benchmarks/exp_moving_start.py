@@ -70,6 +70,18 @@ def run(planner: Planner, sim: FastSimulator, seed: int, looks: int, limit: int)
     return True, None
 
 
+def paired_line(label: str, won: np.ndarray, base: np.ndarray | None) -> str:
+    """One printed line: ``label``, the success rate of ``won`` (per world) with its exact 95% interval,
+    and against ``base`` (the same worlds; none for the baseline itself) the worlds won only with /
+    only without and the sign test's p."""
+    lo, hi = clopper_pearson(int(won.sum()), len(won))
+    line = f"  {label} {won.mean():.3f} [{lo:.3f}, {hi:.3f}]"
+    if base is not None:
+        only_with, only_without, p = sign_test(won, base)
+        line += f"   worlds won only with: {only_with}, only without: {only_without}, p = {p:.2f}"
+    return line
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
@@ -96,15 +108,9 @@ def main() -> None:
             planner = make_planner(name, config=profile.sim, first_samples=n, **extra)
             runs = [run(planner, sim, s, k, limit) for s in seeds]
             won = np.array([ok for ok, _ in runs])
-            lo, hi = clopper_pearson(int(won.sum()), len(won))
             what = f"looks before the start: {k}" if not n else f"first decision sampled: {n}"
-            line = f"  {name:9s} {what:30s} {won.mean():.3f} [{lo:.3f}, {hi:.3f}]"
-            if base is None:
-                base = won
-            else:
-                only_with, only_without, p = sign_test(won, base)
-                line += f"   worlds won only with: {only_with}, only without: {only_without}, p = {p:.2f}"
-            print(line, flush=True)
+            print(paired_line(f"{name:9s} {what:30s}", won, base), flush=True)
+            base = won if base is None else base
             if k == n == 0:
                 fatal = [f for ok, f in runs if not ok]
                 at_start = sum(f == 0 for f in fatal)

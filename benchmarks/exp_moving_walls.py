@@ -27,11 +27,10 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from exp_moving_start import paired_line  # benchmarks/, the script's own folder
 
 from husky_course.config import get_profile, with_world
-from husky_course.course.diagnosis import sign_test
 from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.planners.base import Planner, episode_start
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
@@ -82,14 +81,8 @@ def main() -> None:
     for variant in VARIANTS:
         planner = make_planner("discs", config=profile.sim, profile=profile)
         won = np.array([run(planner, sim, s, limit, variant) for s in seeds])
-        lo, hi = clopper_pearson(int(won.sum()), len(won))
-        line = f"  {variant:22s} {won.mean():.3f} [{lo:.3f}, {hi:.3f}]"
-        if base is None:
-            base = won
-        else:
-            only_with, only_without, p = sign_test(won, base)
-            line += f"   worlds won only with: {only_with}, only without: {only_without}, p = {p:.2f}"
-        print(line, flush=True)
+        print(paired_line(f"{variant:22s}", won, base), flush=True)
+        base = won if base is None else base
 
 
 if __name__ == "__main__":

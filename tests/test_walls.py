@@ -101,3 +101,16 @@ def test_the_search_sees_a_walker_come_back_from_the_wall() -> None:
     disc_map.faces = (-10.0 + 1.6, 1.6)  # the face 1.6 m to the left: it turned back at 1.3
     back = planner._start_check()(x0, y0, 2.0)[1]
     assert (back < straight - 0.2).any()
+
+
+def test_the_wall_rule_is_part_of_the_planners_stored_key() -> None:
+    """``WallsConfig``'s values live in the disc map's state, so a stored evaluation of the planner
+    (keyed by its whole state; config modules are not in the code fingerprint) changes with them."""
+    import dataclasses
+
+    from husky_course.evaluation.stored import planner_fingerprint
+
+    planner, disc_map = _walking_map()
+    before = planner_fingerprint(planner)
+    disc_map.wall_rule = dataclasses.replace(disc_map.wall_rule, points=disc_map.wall_rule.points + 1)
+    assert planner_fingerprint(planner) != before

@@ -31,9 +31,8 @@ circles' 3 cm) changed nothing measurable (0.727 against 0.737 without arrivals)
 ``benchmarks/exp_moving_ladder.py`` splits the gap on 300 moving tuning worlds: told the truth for
 its first sights alone this planner crosses 0.867 (0.777 as it is), for every disc 0.887, and with
 every cylinder seen so far handed to its search exactly 0.940 (the perfect-perception reference:
-0.957), so its search is not the limit. A small network reading first sights from the previous
-image instead of the arrivals rule (``benchmarks/exp_moving_first_sight.py``) crossed 0.787, no
-difference 300 worlds can show: one image says little of a first sight's motion.
+0.957). A small network reading first sights from the previous image instead of the arrivals rule
+(``benchmarks/exp_moving_first_sight.py``) crossed 0.787, no difference 300 worlds can show.
 
 Settings, chosen on 1,000 tuning worlds (full profile; ``exp_static_ladder.py --sweep``; measured
 with the search's former clearance grid, which crossed the same 0.951 of 3,000 tuning worlds as
@@ -52,7 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ArrivalsConfig, SimConfig
+from ..config import ArrivalsConfig, SimConfig, WallsConfig
 from ..models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
 from .arrivals import Arrivals
 from .mapping import MappingPlanner
@@ -287,7 +286,7 @@ class WalkingDiscMap(DiscMap):
         self.arrivals, self.arrive = Arrivals(config or SimConfig()), bool(arrivals)
         self.widen = float(widen)
         self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
-        self.width, self.faces = (config or SimConfig()).world.width, NO_WALLS
+        self.width, self.faces, self.wall_rule = (config or SimConfig()).world.width, NO_WALLS, WallsConfig()
 
     def reset(self) -> None:
         super().reset()
@@ -336,7 +335,8 @@ class WalkingDiscMap(DiscMap):
         self.arrivals.move(dx, dy)
         kept = super().move(dx, dy)
         self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
-        self.faces = wall_faces(self.walls.points, self.width, (self.faces[0] - dy, self.faces[1] - dy))
+        self.faces = wall_faces(self.walls.points, self.width, (self.faces[0] - dy, self.faces[1] - dy),
+                                self.wall_rule)
         self.discs[:, 1], self.speeds = walk_on(self.discs, self.speeds, self.faces)
         self.motion.move(dx, dy)
         return kept

@@ -24,20 +24,20 @@ def wall_faces(points: np.ndarray, width: float, previous: tuple[float, float] =
     """``(right, left)`` lateral positions of the walls' faces in the robot's frame, read off
     ``points`` ``(m, 2+)`` (robot frame; see the module), or ``previous`` when no face shows."""
     cfg = config or WallsConfig()
-    points = np.asarray(points, float).reshape(-1, np.shape(points)[-1] if np.size(points) else 3)
+    y = np.asarray(points, float)[:, 1]
 
-    def face(y: np.ndarray) -> float | None:
-        if len(y) < cfg.points:
+    def face(side: np.ndarray) -> float | None:
+        if len(side) < cfg.points:
             return None
-        bins = np.round(y / cfg.bin)
+        bins = np.round(side / cfg.bin)
         values, counts = np.unique(bins, return_counts=True)
         best = int(np.argmax(counts))
-        return float(np.median(y[bins == values[best]])) if counts[best] >= cfg.points else None
+        return float(np.median(side[bins == values[best]])) if counts[best] >= cfg.points else None
 
-    left = face(points[points[:, 1] > cfg.beyond, 1])
+    left = face(y[y > cfg.beyond])
     if left is not None:
         return left - width, left
-    right = face(points[points[:, 1] < -cfg.beyond, 1])
+    right = face(y[y < -cfg.beyond])
     if right is not None:
         return right, right + width
     return previous
