@@ -178,6 +178,14 @@ display(Markdown(
 # into free space; when every guess left walks one way, it gets their mean speed. Otherwise it is
 # taken as standing until the next image. The planners without learning (`tracking`) and with
 # learned discs (`discs`) both use this rule; the memory student reads *seen once* instead.
+# The disc planner reads more of those images. Its network gives a first sight's centre and radius,
+# so each guess predicts the depth of every column the cylinder would have covered in each of the
+# last three images. A column that saw through it rules the guess out. A column that saw its front
+# there, within 0.1 m, supports it; a nearer depth hid it, and says nothing. Among the guesses left,
+# those with the most supporting columns decide, when they agree on standing or on a direction.
+# A cylinder half hidden last time, or hidden last time and seen the time before, now gets its walk.
+# `benchmarks/exp_moving_evidence.py` compares it with the centre-column rule on the tuning set,
+# and offers the same reading to the tracker, whose circles are fitted with the course's mean radius.
 # The episode's first decision has no earlier image at all: every cylinder in view is a first
 # sight, and no planner that reads motion off its own images can know yet which of them walk.
 # `benchmarks/exp_moving_start.py` counts the failures already lost there, and measures two ways

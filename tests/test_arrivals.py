@@ -57,3 +57,115 @@ def test_seen_through_both_ways_or_no_previous_image_or_static_course_stands():
     static = Arrivals(SimConfig())
     static.remember(_half_occluded(SimConfig()))
     assert static.speeds(disc)[0] == 0
+
+
+# -- the evidence of the earlier images' columns (Arrivals.read / evidence) ---------------------------------
+
+
+def _seen(arrivals: Arrivals, circles: list[tuple[float, float, float]], hidden: float = 0.0) -> np.ndarray:
+    """A remembered image's per-column depth showing ``circles`` ``(x, y, r)`` (nearest first wins),
+    free elsewhere; the columns with ``|u| < hidden`` see an occluder 1 m ahead."""
+    depth = np.full(MOVING.camera.size, np.inf)
+    for x, y, r in circles:
+        depth = np.minimum(depth, arrivals.front(x, np.array([y]), r)[0])
+    return np.where(np.abs(arrivals.u) < hidden, 1.0, depth)
+
+
+def test_front_is_where_each_column_meets_the_circle():
+    arrivals = Arrivals(MOVING)
+    x, y, r = 3.0, -0.4, 0.25
+    d = arrivals.front(x, np.array([y]), r)[0]
+    hit = np.isfinite(d)
+    assert 2 <= hit.sum() < MOVING.camera.size // 2
+    cam = MOVING.camera.mount_forward
+    gap = np.hypot(cam + d[hit] - x, d[hit] * arrivals.u[hit] - y)  # each hit lies on the circle
+    assert gap == pytest.approx(np.full(hit.sum(), r))
+    assert np.all(d[hit] >= x - cam - r - 1e-9)  # and no nearer than its front
+
+
+def test_a_first_sight_hidden_last_time_at_its_place_is_read_off_the_columns_where_it_was():
+    arrivals = Arrivals(MOVING, images=1)
+    walk = 0.4  # it walks towards +y: one step ago it stood 0.4 m to the right, in view
+    arrivals.remember(_seen(arrivals, [(3.0, -walk, 0.25)], hidden=0.06))
+    disc = np.array([[3.0, 0.0, 0.25]])
+    assert arrivals.speeds(disc)[0] == 0  # the centre column was hidden: standing stays possible
+    assert arrivals.read(disc)[0] == pytest.approx(walk, abs=0.051)
+    still = Arrivals(MOVING, images=1)  # where it stands now, seen the same one step ago: standing
+    still.remember(_seen(still, [(3.0, 0.0, 0.25)]))
+    assert still.evidence(disc)[0] == 0
+
+
+def test_an_older_image_decides_when_the_last_one_saw_nothing_of_it_carried_by_dead_reckoning():
+    disc, walk = np.array([[3.0, 0.0, 0.25]]), -0.3
+    reads = {}
+    for images in (1, 3):
+        arrivals = Arrivals(MOVING, images=images)
+        arrivals.remember(_seen(arrivals, [(5.0, -2 * walk, 0.25)]))  # two steps ago, 2 m further back
+        arrivals.move(1.0, 0.0)
+        arrivals.remember(np.full(MOVING.camera.size, 1.0))  # one step ago: a wall hid everything
+        arrivals.move(1.0, 0.0)
+        reads[images] = arrivals.read(disc)[0]
+    assert reads[1] == 0
+    assert reads[3] == pytest.approx(walk, abs=0.051)
+
+
+def test_evidence_is_silent_without_a_match_without_images_and_on_the_static_course():
+    disc = np.array([[3.0, 0.0, 0.25], [2.5, 1.0, 0.3]])
+    arrivals = Arrivals(MOVING)
+    assert np.isnan(arrivals.evidence(disc)).all()  # no image yet
+    arrivals.remember(np.full(MOVING.camera.size, np.inf))  # free everywhere: every hypothesis out
+    assert np.isnan(arrivals.evidence(disc)).all()
+    assert np.array_equal(arrivals.read(disc), arrivals.speeds(disc))
+    off = Arrivals(MOVING, images=0)
+    off.remember(_seen(off, [(3.0, -0.4, 0.25)], hidden=0.06))
+    assert np.isnan(off.evidence(disc)).all()
+    assert np.array_equal(off.read(disc), off.speeds(disc))
+    static = Arrivals(SimConfig())
+    static.remember(_seen(static, [(3.0, -0.4, 0.25)], hidden=0.06))
+    assert np.isnan(static.evidence(disc)).all()
+    with pytest.raises(ValueError, match="images"):
+        Arrivals(MOVING, images=-1)
+
+
+def test_a_column_that_saw_through_rules_a_walk_out_however_many_columns_match_it():
+    x = 1.6  # near: a circle spans about six columns
+    disc = np.array([[x, 0.0, 0.25]])
+    arrivals = Arrivals(MOVING, images=1)
+    old = _seen(arrivals, [(x, -0.4, 0.25)])  # where it stood: only two columns of it in view
+    shown = np.flatnonzero(np.isfinite(old))
+    old[shown[2:]] = 0.5
+    decoy = _seen(arrivals, [(x, 0.6, 0.25)])  # a walk of -0.6 matches five of this circle's columns...
+    hit = np.flatnonzero(np.isfinite(decoy))
+    decoy[hit[np.argmax(decoy[hit])]] = np.inf  # ...but one saw through where it would stand
+    arrivals.remember(np.minimum(old, decoy))
+    assert arrivals.read(disc)[0] == pytest.approx(0.4, abs=0.051)
+
+
+def test_without_a_matching_column_the_evidence_is_silent():
+    arrivals = Arrivals(MOVING, images=1)
+    u = arrivals.u  # the centre and the right hidden, the left free: only walks from the right are left
+    arrivals.remember(np.where(u > 0.06, np.inf, 1.0))
+    disc = np.array([[3.0, 0.0, 0.25]])
+    assert np.isnan(arrivals.evidence(disc)[0])
+    assert arrivals.read(disc)[0] == 0  # the centre column was hidden: the rule leaves it standing
+
+
+def test_the_planners_first_sights_take_the_evidence_as_configured():
+    import torch
+
+    from husky_course.config import ArrivalsConfig
+    from husky_course.models.discs import DiscNet
+    from husky_course.planners.discs import DiscTrackingPlanner
+    from husky_course.planners.tracking import TrackingPlanner
+
+    torch.manual_seed(0)
+    discs = DiscTrackingPlanner(DiscNet(MOVING.world.radius_range).eval(), MOVING).map
+    tracker = TrackingPlanner(MOVING).map
+    assert discs.arrivals.images == ArrivalsConfig.images > 0
+    assert tracker.arrivals.images == ArrivalsConfig.tracker_images
+    assert TrackingPlanner(MOVING, evidence_images=2).map.arrivals.images == 2
+    discs.arrivals.remember(_seen(discs.arrivals, [(3.0, -0.4, 0.25)], hidden=0.06))
+    first = np.array([[3.0, 0.0, 0.25], [2.0, 1.0, 0.3]])
+    speed, fresh = discs.first_sights(first, np.array([True, True]), np.zeros(2), np.array([True, False]))
+    assert speed[0] == pytest.approx(0.4, abs=0.051) and speed[1] == 0  # a tracked disc keeps its own
+    assert fresh.tolist() == [True, False]

@@ -98,6 +98,12 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*straight +\d\.\d{{3}} [\s\S]*"
         r"faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
     ),
+    "exp_moving_evidence.py": (
+        ["--profile", "quick", "--worlds", "3", "--skip", "1"],
+        rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +images 0 +\d\.\d{{3}} [\s\S]*"
+        r"discs +images 3 +\d\.\d{3} .*only without: \d+, p = \d\.\d\d[\s\S]*"
+        r"tracking +images 3 +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
+    ),
     "exp_moving_student.py": (
         ["--profile", "quick", "--rounds", "1", "--worlds-per-round", "3", "--epochs", "1",
          "--eval-worlds", "3", "--store", "{tmp}"],

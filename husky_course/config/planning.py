@@ -101,6 +101,15 @@ class ArrivalsConfig:
 
     tolerance: float = 0.15  #: m beyond a hypothesised front the previous ray must reach
     hypotheses: int = 5  #: walking speeds tried per direction
+    #: previous images whose columns' evidence :meth:`~husky_course.planners.arrivals.Arrivals.read`
+    #: weighs (0: off; the module gives the measurements: 1 / 3 images chosen on three slices)
+    images: int = 3
+    evidence_tolerance: float = 0.1  #: m within which a column matches a hypothesised circle
+    #: the tracker's ``images`` (:class:`~husky_course.planners.tracking.TrackingPlanner`). Off: offered
+    #: the same evidence on its fitted circles, the tracker crossed 0.735 -> 0.744 (24 / 15) and 0.756 ->
+    #: 0.756 (16 / 16) on worlds 0-999 / 1,000-1,999 of the tuning set (full profile;
+    #: ``benchmarks/exp_moving_evidence.py``)
+    tracker_images: int = 0
     #: steps over which a first sight left standing is also taken as possibly walking (0: off). Off:
     #: on the tuning set (300 moving worlds, full profile, the tracker; ``exp_moving_doubt.py``) the
     #: band cost success in every form tried: off 0.740; in the clearance only, 1 / 2 steps, 0.700 /

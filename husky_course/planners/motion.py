@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from ..config import SimConfig, TrackingConfig
+from ..config import ArrivalsConfig, SimConfig, TrackingConfig
 from .arrivals import Arrivals
 from .perception import DepthScan, EgoMap
 
@@ -282,10 +282,12 @@ class WalkingMap:
     On the static course every velocity is 0 and it is the map itself.
     """
 
-    def __init__(self, config: SimConfig, forget_behind: float, arrivals: bool = False) -> None:
+    def __init__(self, config: SimConfig, forget_behind: float, arrivals: bool = False,
+                 images: int = ArrivalsConfig.tracker_images) -> None:
         self.map = EgoMap(DepthScan(config), forget_behind)
         self.motion = MotionMemory(config)
-        self.arrivals = Arrivals(config) if arrivals else None  #: first sights that walked in
+        #: first sights that walked in (``images``: the earlier images' evidence, :meth:`Arrivals.read`)
+        self.arrivals = Arrivals(config, images=images) if arrivals else None
         self.velocity = np.empty(0)  #: per point, m per step along y
         self.fresh = np.zeros(0, bool)  #: per point: its piece was seen once (its velocity unknown)
 
@@ -315,7 +317,7 @@ class WalkingMap:
             for idx in segments(now, 0.3, m.spacing):
                 if m.tracks.fresh[idx].all() and np.ptp(now[idx], axis=0).max() <= 1.0:
                     disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]
-                    v[idx] = self.arrivals.speeds(disc[None])[0]
+                    v[idx] = self.arrivals.read(disc[None])[0]
             self.arrivals.remember(self.map.scan.columns(obs))
         kept = self.map.add(obs)
         self.velocity = np.concatenate([v, self.velocity[kept]])

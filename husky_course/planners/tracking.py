@@ -50,9 +50,11 @@ class TrackingPlanner(MappingPlanner):
     def __init__(self, config: SimConfig | None = None, horizon: int = MappingConfig.horizon,
                  arrivals: bool = True, doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
-                 first_samples: int = ArrivalsConfig.first_samples, **kwargs: float) -> None:
+                 first_samples: int = ArrivalsConfig.first_samples,
+                 evidence_images: int = ArrivalsConfig.tracker_images, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
-        self.map = WalkingMap(self.config, self.map.forget_behind, arrivals)  # type: ignore[assignment]
+        self.map = WalkingMap(  # type: ignore[assignment]
+            self.config, self.map.forget_behind, arrivals, evidence_images)
         _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
 
     @property
