@@ -95,8 +95,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_walls.py": (
         ["--profile", "quick", "--worlds", "3", "--skip", "1"],
-        rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*straight +\d\.\d{{3}} [\s\S]*"
-        r"faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
+        rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +straight +\d\.\d{{3}} [\s\S]*"
+        r"tracking +bouncing, faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
     ),
     "exp_moving_evidence.py": (
         ["--profile", "quick", "--worlds", "3", "--skip", "1"],

@@ -114,3 +114,26 @@ def test_the_wall_rule_is_part_of_the_planners_stored_key() -> None:
     before = planner_fingerprint(planner)
     disc_map.wall_rule = dataclasses.replace(disc_map.wall_rule, points=disc_map.wall_rule.points + 1)
     assert planner_fingerprint(planner) != before
+
+
+def test_the_trackers_walking_points_bounce_off_the_faces_of_its_wall_points() -> None:
+    """The tracker's map reads the faces off the points of its long pieces (walls), not off a
+    cylinder's points, and a walking point turns back at the face; without ``bounce`` it walks on."""
+    from husky_course.config import SimConfig, sim_for_world
+    from husky_course.planners.motion import WalkingMap
+
+    config = sim_for_world(SimConfig(), "moving")
+    walls = np.c_[np.linspace(1.0, 5.0, 12), np.full(12, -3.0), np.full(12, 0.05)]  # a face at y = -3
+    crowd = np.c_[np.full(8, 2.0), np.full(8, 3.0), np.full(8, 0.05)]  # a cylinder's points, not a wall
+    walker = np.array([[2.5, -2.7, 0.05]])  # 0.25 m from touching the face, walking 0.6 m a step: to -2.6
+    ys = {}
+    for bounce in (False, True):
+        walking = WalkingMap(config, forget_behind=1.8, bounce=bounce)
+        walking.map.points = np.concatenate([walker, walls, crowd])
+        walking.velocity = np.r_[-0.6, np.zeros(20)]
+        walking.fresh, walking.wall = np.zeros(21, bool), np.r_[False, np.ones(12, bool), np.zeros(8, bool)]
+        walking.move(0.0, 0.0)
+        ys[bounce] = (walking.map.points[0, 1], walking.velocity[0], walking.faces)
+    assert ys[False][0] == pytest.approx(-3.3) and ys[False][2] == NO_WALLS
+    assert ys[True][2] == pytest.approx((-3.0, config.world.width - 3.0))
+    assert ys[True][0] == pytest.approx(-2.6) and ys[True][1] == pytest.approx(0.6)

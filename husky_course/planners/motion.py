@@ -36,9 +36,10 @@ import math
 
 import numpy as np
 
-from ..config import ArrivalsConfig, SimConfig, TrackingConfig
+from ..config import ArrivalsConfig, SimConfig, TrackingConfig, WallsConfig
 from .arrivals import Arrivals
 from .perception import DepthScan, EgoMap
+from .walls import NO_WALLS, walk_on, wall_faces
 
 
 def segments(points: np.ndarray, gap: float = 0.3, spacing: float = 0.0) -> list[np.ndarray]:
@@ -278,14 +279,18 @@ class WalkingMap:
     :meth:`add` merges an image's scan, each new point with the velocity :class:`MotionMemory`
     estimates for it (a point seen again is replaced, as in the map); :meth:`move` is dead
     reckoning of the robot *and* of the obstacles: after a primitive that moved the robot by
-    ``(dx, dy)`` every point moves by ``(-dx, -dy)`` and then one step's walk along ``y``.
+    ``(dx, dy)`` every point moves by ``(-dx, -dy)`` and then one step's walk along ``y``, with
+    ``bounce`` turning back at the side walls' faces read off its wall points (:mod:`.walls`).
     On the static course every velocity is 0 and it is the map itself.
     """
 
     def __init__(self, config: SimConfig, forget_behind: float, arrivals: bool = False,
-                 images: int = ArrivalsConfig.tracker_images) -> None:
+                 images: int = ArrivalsConfig.tracker_images, bounce: bool = False) -> None:
         self.map = EgoMap(DepthScan(config), forget_behind)
         self.motion = MotionMemory(config)
+        #: with ``bounce``, the side walls' faces read off the wall points (:mod:`.walls`); else none
+        self.bounce, self.width, self.wall_rule = bool(bounce), config.world.width, WallsConfig()
+        self.faces, self.wall = NO_WALLS, np.zeros(0, bool)  #: ``wall``: per point, on a piece over 1 m
         #: first sights that walked in (``images``: the earlier images' evidence, :meth:`Arrivals.read`)
         self.arrivals = Arrivals(config, images=images) if arrivals else None
         self.velocity = np.empty(0)  #: per point, m per step along y
@@ -305,6 +310,7 @@ class WalkingMap:
         self.map.reset()
         self.motion.reset()
         self.velocity, self.fresh = np.empty(0), np.zeros(0, bool)
+        self.faces, self.wall = NO_WALLS, np.zeros(0, bool)
         if self.arrivals is not None:
             self.arrivals.reset()
 
@@ -319,9 +325,13 @@ class WalkingMap:
                     disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]
                     v[idx] = self.arrivals.read(disc[None])[0]
             self.arrivals.remember(self.map.scan.columns(obs))
+        wall = np.zeros(len(now), bool)
+        for idx in segments(now, 0.3, self.motion.spacing):
+            wall[idx] = np.ptp(now[idx], axis=0).max() > 1.0  # as :class:`Tracks` leaves it untracked
         kept = self.map.add(obs)
         self.velocity = np.concatenate([v, self.velocity[kept]])
         self.fresh = np.concatenate([self.motion.tracks.fresh, self.fresh[kept]])
+        self.wall = np.concatenate([wall, self.wall[kept]])
         return v
 
     def at(self, t: float | np.ndarray) -> np.ndarray:
@@ -335,6 +345,9 @@ class WalkingMap:
         kept = self.map.move(dx, dy)
         if self.arrivals is not None:
             self.arrivals.move(dx, dy)
-        self.velocity, self.fresh = self.velocity[kept], self.fresh[kept]
-        self.map.points[:, 1] += self.velocity
+        self.velocity, self.fresh, self.wall = self.velocity[kept], self.fresh[kept], self.wall[kept]
+        if self.bounce:  # the faces read again (dead reckoning shifts the previous ones)
+            previous = (self.faces[0] - dy, self.faces[1] - dy)
+            self.faces = wall_faces(self.map.points[self.wall], self.width, previous, self.wall_rule)
+        self.map.points[:, 1], self.velocity = walk_on(self.map.points, self.velocity, self.faces)
         self.motion.move(dx, dy)

@@ -13,7 +13,8 @@ student (chapter 10), reading the same two things the student's memory gives it.
 * **A map that walks** (:class:`~husky_course.planners.motion.WalkingMap`). The points of
   :class:`~husky_course.planners.mapping.MappingPlanner`'s map each carry that velocity; after
   every step a remembered point moves by it (dead reckoning of the robot *and* of the obstacle),
-  and a point seen again is replaced by the new scan's.
+  and a point seen again is replaced by the new scan's. A walking point bounces off the side walls'
+  faces, read off its wall points as the disc planner reads them (:mod:`~husky_course.planners.walls`).
 * **Space-time search.** The oracle's lattice search over the map: a standing point is judged on
   the mapping planner's path tables, a walking point exactly, where it is at each of 21 samples'
   times (level ``k`` of the lattice is the step from ``k`` to ``k + 1`` steps after now).
@@ -34,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ArrivalsConfig, MappingConfig, SimConfig
+from ..config import ArrivalsConfig, MappingConfig, SimConfig, WallsConfig
 from ..sim.lattice import StartCheck
 from ..sim.world import sample_times
 from .mapping import MappingPlanner
@@ -51,10 +52,11 @@ class TrackingPlanner(MappingPlanner):
                  arrivals: bool = True, doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples,
-                 evidence_images: int = ArrivalsConfig.tracker_images, **kwargs: float) -> None:
+                 evidence_images: int = ArrivalsConfig.tracker_images, bounce: bool = WallsConfig.tracker,
+                 **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(  # type: ignore[assignment]
-            self.config, self.map.forget_behind, arrivals, evidence_images)
+            self.config, self.map.forget_behind, arrivals, evidence_images, bounce)
         _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
 
     @property
@@ -88,7 +90,7 @@ class TrackingPlanner(MappingPlanner):
         every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
         x, t = local[:, ::every, 0], sample_times(0.0, local.shape[1])[::every]  # relative to an edge's start
         ahead = (x.min() - reach, x.max() + reach)
-        faces = getattr(self.map, "faces", NO_WALLS)  # the disc planner's; the tracker knows none
+        faces = getattr(self.map, "faces", NO_WALLS)  # the walls' faces as its map reads them
 
         def near(p: np.ndarray, x0: float) -> np.ndarray:
             return p[(p[:, 0] > x0 + ahead[0]) & (p[:, 0] < x0 + ahead[1])]

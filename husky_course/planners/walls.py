@@ -1,13 +1,14 @@
-"""The side walls as the moving disc planner knows them: where their faces are, and the walk of a
-cylinder that bounces off them.
+"""The side walls as the moving course's planners know them: where their faces are, and the walk of
+a cylinder that bounces off them.
 
 A walking cylinder of the moving course reflects off the side walls (a triangle wave in time,
 :meth:`~husky_course.sim.world.World.obstacle_y`). Dead reckoning gives the robot its displacement,
 not its place in the course (the start's ``y`` is unknown to it), so it reads the walls' faces off
 what it has seen: the remembered points no disc explains (:class:`~husky_course.planners.discs.DiscMap`'s
-wall points) that lie further than ``beyond`` to a side and crowd into one ``bin`` of lateral
-position (a wall seen along the course puts many points on one line). The course's width gives the
-other face. Until a face has been seen, nothing bounces (the faces are at infinity).
+wall points; the tracker's :class:`~husky_course.planners.motion.WalkingMap`: the points of pieces
+over 1 m) that lie further than ``beyond`` to a side and crowd into one ``bin`` of lateral position
+(a wall seen along the course puts many points on one line). The course's width gives the other
+face. Until a face has been seen, nothing bounces (the faces are at infinity).
 """
 
 from __future__ import annotations
