@@ -190,3 +190,21 @@ def test_clean_keeps_a_certificate_at_the_scale_its_key_records(tmp_path, monkey
     assert run in {*stale.sweep(QUICK).stale}  # no key.json: nothing says which scale it is
     (run / certificate.KEY_FILE).write_text(json.dumps(certificate.certificate_fingerprint(bigger)))
     assert run in stale.sweep(QUICK).current
+
+
+def test_clean_sorts_the_training_logs_as_the_artifacts_they_log(tmp_path, monkeypatch):
+    """A TensorBoard log named as a current artifact is kept; one named as no current artifact is stale;
+    a DAgger round's log, whose name this cannot judge, is kept unchecked."""
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(tmp_path / "store"))
+    fp = {"any": "key"}
+    logs = tmp_path / "runs" / "quick"
+    kept = logs / discs.disc_dir(QUICK).name
+    old = store.runs_dir("discs", fp, QUICK)
+    round_log = store.runs_dir("memory-round1", fp, QUICK)
+    assert old.parent == logs
+    for path in (kept, old, round_log):
+        path.mkdir(parents=True)
+    found = stale.sweep(QUICK)
+    assert kept in found.current and old in found.stale and round_log in found.unchecked
+    assert cli.main(["clean", "--profile", "quick"]) == 0
+    assert kept.exists() and not old.exists() and round_log.exists()

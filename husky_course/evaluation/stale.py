@@ -16,6 +16,11 @@ entries of ``artifacts/<profile>/`` into
 * *unchecked* -- kinds this module cannot judge (chapter 4's ``diagnosis``, anything unknown):
   always kept.
 
+The training runs' TensorBoard logs beside the store (``runs/<profile>/<name>-<hash>``, named as
+the artifact the run made) are sorted the same way: a log of a judged kind is current when the
+store's current artifact of that name is, else stale; the others (the DAgger rounds' logs, whose
+names hash each round's own key) are unchecked.
+
 Judging builds nothing: it reads ``meta.json`` files, checkpoint headers and ``key.json`` files.
 """
 
@@ -95,14 +100,13 @@ def current_paths(profile: Profile) -> set[Path]:
 
 
 def sweep(profile: Profile) -> Sweep:
-    """Sort the entries of ``artifacts/<profile>/`` into stale, current and unchecked."""
+    """Sort the entries of ``artifacts/<profile>/``, and the training logs of ``runs/<profile>/``, into
+    stale, current and unchecked."""
     profile = check_profile(profile)
     root = artifacts_root() / profile.name
     found = Sweep()
-    if not root.is_dir():
-        return found
     current = current_paths(profile)
-    for entry in sorted(root.iterdir()):
+    for entry in sorted(root.iterdir()) if root.is_dir() else []:
         if entry.name.startswith("dataset-"):
             (found.current if entry in current else found.stale).append(entry)
         elif entry.name == "models" and entry.is_dir():
@@ -117,6 +121,13 @@ def sweep(profile: Profile) -> Sweep:
                 (found.stale if stale else found.current).append(run)
         else:
             found.unchecked.append(entry)
+    logs = artifacts_root().parent / "runs" / profile.name  # :func:`~husky_course.data.store.runs_dir`
+    names = {path.name for path in current}
+    for run in sorted(logs.iterdir()) if logs.is_dir() else []:
+        if run.name.rsplit("-", 1)[0] not in JUDGED:
+            found.unchecked.append(run)
+        else:
+            (found.current if run.name in names else found.stale).append(run)
     return found
 
 
