@@ -204,8 +204,10 @@ display(Markdown(
 # A walking cylinder turns back at a side wall. The robot does not know where in the course it
 # started, but it sees the walls: the disc planner reads their faces off the points it remembers
 # that line up along the course (`husky_course.planners.walls`), and its walking discs bounce off
-# them, in its map and in its search (`benchmarks/exp_moving_walls.py` compares it with walks in a
-# straight line on the tuning set).
+# them, in its map and in its search. The tracker's walking points bounce by the same rule, its
+# faces read off the points of its long pieces, so that neither planner holds a reading of the
+# course the other lacks (`benchmarks/exp_moving_walls.py` compares both with walks in a straight
+# line on the tuning set).
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every
