@@ -28,60 +28,24 @@ median lateral error is about 1 cm within 3 m, the fitted circles' 3 cm).
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 from exp_moving_start import paired_line  # benchmarks/, the script's own folder
+from exp_moving_walls import run, slice_setup
 
-from husky_course.config import get_profile, with_world
-from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.planners.base import Planner, episode_start
 from husky_course.planners.registry import make_planner
-from husky_course.sim.fast import FastSimulator
 
 IMAGES = {"discs": (0, 1, 3), "tracking": (0, 3)}
 
 
-def run(planner: Planner, sim: FastSimulator, seed: int, limit: int) -> bool:
-    """One episode of ``planner`` on world ``seed``: did it cross?"""
-    world = sim.load(seed)
-    pose = world.start.copy()
-    planner.reset(episode_start(planner, sim, seed, pose, limit))
-    obs = sim.depth(pose[None], 0.0)[0]
-    for step in range(limit):
-        action = planner.act(obs, pose)
-        result = sim.apply(pose, action, step)
-        planner.observe(action, None)
-        if result.collided:
-            return False
-        pose = result.pose
-        obs = sim.depth(pose[None], step + 1)[0]
-    return True
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--profile", default="full")
-    parser.add_argument("--worlds", type=int, default=1000)
-    parser.add_argument("--skip", type=int, default=0, help="worlds of the set passed over first")
-    parser.add_argument("--seed", type=int, default=1, help="evaluation set (1: the tuning set)")
-    parser.add_argument("--planners", default="discs,tracking", help=f"any of {', '.join(IMAGES)}")
-    args = parser.parse_args()
-    names = [n for n in args.planners.split(",") if n]
-    if args.worlds < 1 or args.skip < 0 or not names or set(names) - set(IMAGES):
-        parser.error(f"need --worlds >= 1, --skip >= 0 and --planners among {sorted(IMAGES)}")
-    profile = with_world(get_profile(args.profile), "moving")
-    sim, limit = FastSimulator(profile.sim), profile.sim.max_primitives
-    seeds = [int(s) for s in eval_world_seeds(args.skip + args.worlds, args.seed)][args.skip:]
-    print(f"{args.worlds} moving worlds of evaluation set {args.seed} (after its first {args.skip}), "
-          f"profile {profile.name}:")
+    names, profile, sim, limit, seeds = slice_setup(__doc__)
     for name in names:
         base = None
         for images in IMAGES[name]:
             learned = {"profile": profile} if name == "discs" else {}
             planner = make_planner(name, config=profile.sim, **learned)
             planner.map.arrivals.images = images  # type: ignore[attr-defined]
-            won = np.array([run(planner, sim, s, limit) for s in seeds])
+            won = np.array([run(planner, sim, s, limit, "bouncing, faces read") for s in seeds])  # as it is
             print(paired_line(f"{name:9s} images {images}", won, base), flush=True)
             base = won if base is None else base
 

@@ -32,7 +32,7 @@ import argparse
 import numpy as np
 from exp_moving_start import paired_line  # benchmarks/, the script's own folder
 
-from husky_course.config import get_profile, with_world
+from husky_course.config import Profile, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.planners.base import Planner, episode_start
 from husky_course.planners.registry import make_planner
@@ -67,8 +67,11 @@ def run(planner: Planner, sim: FastSimulator, seed: int, limit: int, variant: st
     return True
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def slice_setup(doc: str) -> tuple[list[str], Profile, FastSimulator, int, list[int]]:
+    """The command line of a moving benchmark on a slice of worlds (this one's, and
+    ``exp_moving_evidence.py``'s): ``(planners, profile, simulator, primitives per episode, world seeds)``,
+    after printing which worlds."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--profile", default="full")
     parser.add_argument("--worlds", type=int, default=1000)
     parser.add_argument("--skip", type=int, default=0, help="worlds of the set passed over first")
@@ -79,10 +82,14 @@ def main() -> None:
     if args.worlds < 1 or args.skip < 0 or not names or set(names) - {"discs", "tracking"}:
         parser.error(f"need --worlds >= 1, --skip >= 0 and --planners among discs, tracking; got {args}")
     profile = with_world(get_profile(args.profile), "moving")
-    sim, limit = FastSimulator(profile.sim), profile.sim.max_primitives
     seeds = [int(s) for s in eval_world_seeds(args.skip + args.worlds, args.seed)][args.skip:]
     print(f"{args.worlds} moving worlds of evaluation set {args.seed} "
           f"(after its first {args.skip}), profile {profile.name}:")
+    return names, profile, FastSimulator(profile.sim), profile.sim.max_primitives, seeds
+
+
+def main() -> None:
+    names, profile, sim, limit, seeds = slice_setup(__doc__)
     for name in names:
         base = None
         for variant in VARIANTS:
