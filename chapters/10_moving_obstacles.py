@@ -382,7 +382,7 @@ text += (
     f"velocities, crosses {disc.success_rate:.1%} ({disc.success_rate / orc.success_rate:.0%} of the oracle, "
     f"{'meeting' if disc.success_rate >= GOAL * orc.success_rate else 'short of'} the goal of {GOAL:.0%}): "
     + ("above the tracker, with intervals that do not overlap" if disc.success_ci95[0] > track.success_ci95[1]
-       else "more than the tracker, within its interval" if disc.success_rate > track.success_rate
+       else "more than the tracker, though the two intervals overlap" if disc.success_rate > track.success_rate
        else "no more than the tracker")
     + f". On the same worlds it wins {only_disc} that the tracker loses and loses {only_track} that the tracker "
     f"wins (exact sign test p = {p_disc:.2g}: "
