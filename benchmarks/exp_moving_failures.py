@@ -44,7 +44,7 @@ import numpy as np
 from husky_course.config import CameraConfig, OracleConfig, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.planners.base import Planner, episode_start
-from husky_course.planners.discs import WalkingDiscMap
+from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.reference import ON_CYLINDER, TOLD_RULES, truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator

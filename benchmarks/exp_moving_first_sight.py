@@ -48,7 +48,7 @@ from husky_course.engines import map_tasks
 from husky_course.evaluation.episodes import evaluate
 from husky_course.planners.arrivals import Arrivals
 from husky_course.planners.base import episode_start
-from husky_course.planners.discs import WalkingDiscMap
+from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 

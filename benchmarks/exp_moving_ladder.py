@@ -21,7 +21,7 @@ in rungs of what a velocity oracle may give away:
 * ``always``: the true velocity for every map point on a cylinder, first sight included (beyond
   any camera).
 
-The disc planner (:class:`~husky_course.planners.discs.WalkingDiscMap`: the learned discs walk with
+The disc planner (:class:`~husky_course.planners.moving_discs.WalkingDiscMap`: the learned discs walk with
 the tracker's velocities, a first sight with the arrivals rule's) is told the truth per disc, in
 finer rungs that split its first sights: ``tracked`` (discs with a track of two looks or more),
 ``first sight, seen before`` (discs the tracks call a first sight on a cylinder some earlier image
@@ -50,8 +50,8 @@ import numpy as np
 from husky_course.config import get_profile, with_world
 from husky_course.evaluation.episodes import evaluate
 from husky_course.planners.base import EpisodeStart, Planner
-from husky_course.planners.discs import WalkingDiscMap
 from husky_course.planners.motion import WalkingMap
+from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.planners.reference import (
     ON_CYLINDER,

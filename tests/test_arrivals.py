@@ -155,7 +155,7 @@ def test_the_planners_first_sights_take_the_evidence_as_configured():
 
     from husky_course.config import ArrivalsConfig
     from husky_course.models.discs import DiscNet
-    from husky_course.planners.discs import DiscTrackingPlanner
+    from husky_course.planners.moving_discs import DiscTrackingPlanner
     from husky_course.planners.tracking import TrackingPlanner
 
     torch.manual_seed(0)

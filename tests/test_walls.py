@@ -60,7 +60,7 @@ def _walking_map():
 
     from husky_course.config import get_profile, with_world
     from husky_course.models.discs import DiscNet
-    from husky_course.planners.discs import DiscTrackingPlanner
+    from husky_course.planners.moving_discs import DiscTrackingPlanner
 
     profile = with_world(get_profile("quick"), "moving")
     torch.manual_seed(0)

@@ -229,7 +229,8 @@ def make_learned_planner(
 
             return MemoryPlanner(load_memory(profile)[0], profile.sim, profile.memory, **kwargs)
         if name == "discs":  # trained on simulated views read by the planner's perception: only loaded here
-            from .discs import DiscPlanner, DiscTrackingPlanner
+            from .discs import DiscPlanner
+            from .moving_discs import DiscTrackingPlanner
 
             d = profile.discs
             config = kwargs.pop("config", profile.sim)  # the course it runs on: discs walk on the moving one

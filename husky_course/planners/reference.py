@@ -46,7 +46,8 @@ from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
 from ..sim.world import World
 from .base import EpisodeStart, Planner, search_start
-from .discs import DiscMap, DiscPlanner, DiscTrackingPlanner, WalkingDiscMap, majority_cylinder
+from .discs import DiscMap, DiscPlanner, majority_cylinder
+from .moving_discs import DiscTrackingPlanner, WalkingDiscMap
 
 #: What :class:`ToldDiscsPlanner`'s map is told: the true velocity of the discs its tracks call a first
 #: sight; of every disc; or, every step, every cylinder an image has rendered so far, exactly, with
@@ -267,7 +268,7 @@ def truth_in_frame(world: World, pose: np.ndarray, time: float) -> tuple[np.ndar
 
 
 class _ToldMap(WalkingDiscMap):
-    """A :class:`~husky_course.planners.discs.WalkingDiscMap` told the truth as ``rule`` allows."""
+    """A :class:`~husky_course.planners.moving_discs.WalkingDiscMap` told the truth as ``rule`` allows."""
 
     rule: str
     eyes: FastSimulator

@@ -42,7 +42,7 @@ _LEARNED_CLASSES: dict[str, tuple[str, ...]] = {
     "rnn": ("learned:RNNPlanner",),
     "distilled": ("learned:DistilledPlanner",),
     "memory": ("memory:MemoryPlanner",),
-    "discs": ("discs:DiscPlanner", "discs:DiscTrackingPlanner"),  # the latter on the moving course
+    "discs": ("discs:DiscPlanner", "moving_discs:DiscTrackingPlanner"),  # the latter on the moving course
 }
 #: Analysis-only references (privileged): name -> (class in :mod:`.reference`, its fixed arguments).
 _REFERENCES: dict[str, tuple[str, dict[str, Any]]] = {

@@ -1,0 +1,129 @@
+"""The disc planner on the moving course (chapter 10): its learned discs walk, and it plans in space-time.
+
+:class:`WalkingDiscMap` is the disc map (:class:`~husky_course.planners.discs.DiscMap`) whose discs
+carry lateral velocities: read off successive scans by the tracker's
+:class:`~husky_course.planners.motion.MotionMemory`, a first sight's by the earlier images' columns
+(:meth:`~husky_course.planners.arrivals.Arrivals.read`), bouncing off the side walls' faces
+(:mod:`~husky_course.planners.walls`). :class:`DiscTrackingPlanner` searches it in space-time as the
+tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points.
+The measurements behind each choice are in :mod:`~husky_course.planners.discs`,
+:mod:`~husky_course.planners.arrivals` and :class:`~husky_course.config.WallsConfig`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import ArrivalsConfig, SimConfig, WallsConfig
+from ..models.discs import DiscNet
+from .arrivals import Arrivals
+from .discs import DiscMap, DiscPlanner
+from .motion import MotionMemory
+from .tracking import TrackingPlanner, _set_doubt
+from .walls import NO_WALLS, walk_on, wall_faces
+
+
+class WalkingDiscMap(DiscMap):
+    """A :class:`DiscMap` whose discs walk (the moving course, chapter 10).
+
+    Each new disc carries the lateral velocity of its piece, read off successive scans by the
+    tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's
+    points; 0 for a first sight, taken as standing until the next image); after every step a
+    remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
+    course every velocity is 0 and it is the :class:`DiscMap`. ``faces``: the walls' (:mod:`.walls`).
+    """
+
+    def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
+                 unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True) -> None:
+        super().__init__(model, config, forget_behind, unexplained)
+        self.motion = MotionMemory(config or SimConfig())
+        self.arrivals, self.arrive = Arrivals(config or SimConfig()), bool(arrivals)
+        self.widen = float(widen)
+        self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
+        self.width, self.faces, self.wall_rule = (config or SimConfig()).world.width, NO_WALLS, WallsConfig()
+
+    def reset(self) -> None:
+        super().reset()
+        self.motion.reset()
+        self.speeds, self.fresh, self.faces = np.empty(0), np.zeros(0, bool), NO_WALLS
+        self.arrivals.reset()
+
+    @property
+    def points(self) -> np.ndarray:
+        """Discs, then (with ``widen``) a standing copy of every first-sight disc ``widen`` m to each
+        side (where it may have walked by the time the robot passes), then wall points."""
+        first = self.discs[self.fresh] if self.widen > 0 else np.empty((0, 3))
+        side = [first + (0.0, s * self.widen, 0.0) for s in (-1, 1)]
+        return np.concatenate([self.discs, *side, self.walls.points])
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Per point of :attr:`points`: the discs' velocities (m per step along ``y``), then 0."""
+        return np.r_[self.speeds, np.zeros(len(self.points) - len(self.speeds))]
+
+    def add(self, obs: np.ndarray) -> None:
+        d, cols, pts, pieces = self.reader.pieces(obs)
+        v = self.motion.update(pts)
+        fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
+        discs, cyl, other = self.decode(d, cols, pts, pieces)
+        speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
+        first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
+        speed, first = self.first_sights(discs, cyl, speed, first)
+        self.arrivals.remember(d)
+        kept = self._merge(obs, d, discs[cyl], other)
+        self.speeds = np.r_[speed[cyl], self.speeds[kept]]
+        self.fresh = np.r_[first[cyl], self.fresh[kept]]
+
+    def first_sights(self, discs: np.ndarray, cyl: np.ndarray, speed: np.ndarray,
+                     first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(speed, first)`` per piece of an image, its first sights read (``discs (n, 3)`` its
+        discs, ``cyl`` which are cylinders, ``first`` which its tracks see for the first time): with
+        ``arrivals``, a first sight where the last image saw free space walked in. The previous image
+        is still :attr:`arrivals`' (an experiment may read first sights its own way here)."""
+        if self.arrive:
+            speed = np.where(first, self.arrivals.read(discs), speed)
+        return speed, first
+
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        """Dead reckoning; the walls' faces read again; each disc walks on, bouncing off them."""
+        self.arrivals.move(dx, dy)
+        kept = super().move(dx, dy)
+        self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
+        self.faces = wall_faces(self.walls.points, self.width, (self.faces[0] - dy, self.faces[1] - dy),
+                                self.wall_rule)
+        self.discs[:, 1], self.speeds = walk_on(self.discs, self.speeds, self.faces)
+        self.motion.move(dx, dy)
+        return kept
+
+
+class DiscTrackingPlanner(DiscPlanner):
+    """The disc planner on the moving course: its discs walk (:class:`WalkingDiscMap`), and it plans
+    in space-time exactly as the tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`)
+    does over its walking points: standing things on the clearance grid, each walking disc where it
+    is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
+
+    name = "discs"
+    _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
+    _hypothesis = TrackingPlanner._hypothesis
+
+    def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
+                 unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
+                 doubt_steps: float = ArrivalsConfig.doubt_steps,
+                 doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
+                 first_samples: int = ArrivalsConfig.first_samples, **kwargs: float) -> None:
+        super().__init__(model, config, grow, unexplained, **kwargs)
+        self.map = WalkingDiscMap(  # type: ignore[assignment]
+            model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
+
+    @property
+    def doubtful(self) -> np.ndarray:
+        """Per point: a first-sight disc the arrivals rule left standing (it may yet walk either way)."""
+        m = self.map
+        discs = m.fresh & (m.speeds == 0)  # type: ignore[attr-defined]
+        return np.r_[discs, np.zeros(len(self.points) - len(discs), bool)]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Each point's lateral velocity (m per step): the discs' estimates, 0 for walls."""
+        return self.map.velocity  # type: ignore[attr-defined]
