@@ -318,16 +318,14 @@ class WalkingMap:
         """Merge the scan of ``obs``; return its points' velocities (they come first in :attr:`points`)."""
         now = self.map.scan(obs)
         v = self.motion.update(now)
-        if self.arrivals is not None:  # a first sight where the last image saw free space walked in
-            m = self.motion
-            for idx in segments(now, 0.3, m.spacing):
-                if m.tracks.fresh[idx].all() and np.ptp(now[idx], axis=0).max() <= 1.0:
-                    disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]
-                    v[idx] = self.arrivals.read(disc[None])[0]
+        m, wall = self.motion, np.zeros(len(now), bool)
+        for idx in segments(now, 0.3, m.spacing):  # the pieces :class:`Tracks` was given
+            wall[idx] = np.ptp(now[idx], axis=0).max() > 1.0  # left untracked: a wall, or several things
+            if self.arrivals is not None and m.tracks.fresh[idx].all() and not wall[idx[0]]:
+                disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]  # a first sight:
+                v[idx] = self.arrivals.read(disc[None])[0]  # did it walk into space seen free?
+        if self.arrivals is not None:
             self.arrivals.remember(self.map.scan.columns(obs))
-        wall = np.zeros(len(now), bool)
-        for idx in segments(now, 0.3, self.motion.spacing):
-            wall[idx] = np.ptp(now[idx], axis=0).max() > 1.0  # as :class:`Tracks` leaves it untracked
         kept = self.map.add(obs)
         self.velocity = np.concatenate([v, self.velocity[kept]])
         self.fresh = np.concatenate([self.motion.tracks.fresh, self.fresh[kept]])

@@ -28,7 +28,7 @@ class WalkingDiscMap(DiscMap):
 
     Each new disc carries the lateral velocity of its piece, read off successive scans by the
     tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's
-    points; 0 for a first sight, taken as standing until the next image); after every step a
+    points; a first sight's from the earlier images, :meth:`first_sights`); after every step a
     remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
     course every velocity is 0 and it is the :class:`DiscMap`. ``faces``: the walls' (:mod:`.walls`).
     """
@@ -78,8 +78,9 @@ class WalkingDiscMap(DiscMap):
                      first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(speed, first)`` per piece of an image, its first sights read (``discs (n, 3)`` its
         discs, ``cyl`` which are cylinders, ``first`` which its tracks see for the first time): with
-        ``arrivals``, a first sight where the last image saw free space walked in. The previous image
-        is still :attr:`arrivals`' (an experiment may read first sights its own way here)."""
+        ``arrivals``, a first sight's walk as :meth:`~husky_course.planners.arrivals.Arrivals.read`
+        reads it off the earlier images. The previous image is still :attr:`arrivals`' (an experiment
+        may read first sights its own way here)."""
         if self.arrive:
             speed = np.where(first, self.arrivals.read(discs), speed)
         return speed, first
