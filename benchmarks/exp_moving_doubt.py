@@ -7,7 +7,10 @@ judge, is planned around as standing. Here it also stands for the band it could 
 each sample's time, at the course's fastest walk, for up to ``doubt_steps`` steps: in the clearance
 a plan is ranked by (soft), or as an obstacle (hard). Or (hedge) the first primitive is chosen by
 its expected safe steps over three hypotheses for all of them at once: standing, walking left,
-walking right (the course's mean speed), weighted by the course's share of walking cylinders. On
+walking right (the course's mean speed), weighted by the course's share of walking cylinders. Or
+(samples 16) every decision draws 16 walks for each first sight the earlier images leave undecided,
+from the course's motion model over the walks no earlier column saw through, and chooses by the
+mean safe steps over the draws (:class:`~husky_course.config.ArrivalsConfig`'s ``samples``). On
 the moving course's tuning set (evaluation
 set 1 by default), the disc planner and the tracker with each setting side by side on the same
 worlds: success with its exact 95% interval, and the paired count of worlds won only with / only
@@ -25,7 +28,7 @@ from husky_course.planners.registry import make_planner
 SETTINGS = {
     "off": {}, "soft 1": {"doubt_steps": 1.0}, "soft 2": {"doubt_steps": 2.0},
     "hard 0.5": {"doubt_steps": 0.5, "doubt_hard": True}, "hard 1": {"doubt_steps": 1.0, "doubt_hard": True},
-    "hedge": {"hedge": True},
+    "hedge": {"hedge": True}, "samples 16": {"samples": 16},
 }
 
 

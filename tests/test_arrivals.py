@@ -169,3 +169,70 @@ def test_the_planners_first_sights_take_the_evidence_as_configured():
     speed, fresh = discs.first_sights(first, np.array([True, True]), np.zeros(2), np.array([True, False]))
     assert speed[0] == pytest.approx(0.4, abs=0.051) and speed[1] == 0  # a tracked disc keeps its own
     assert fresh.tolist() == [True, False]
+
+
+# -- first sights left undecided: the walks a planner with ``samples`` draws (Arrivals.weights) -----------
+
+
+def test_weights_spread_the_motion_model_over_the_walks_no_column_saw_through():
+    f = MOVING.world.moving_fraction
+    arrivals = Arrivals(MOVING, images=1)
+    h, disc = arrivals.hypotheses, np.array([[3.0, 0.0, 0.25]])
+    prior = np.where(h == 0, 1 - f, f / (len(h) - 1))
+    assert arrivals.weights(disc, f)[0] == pytest.approx(prior)  # no image yet: the motion model
+    arrivals.remember(np.where(arrivals.u > 0.15, np.inf, 1.0))  # the left seen free, the rest hidden
+    assert np.isnan(arrivals.evidence(disc)[0]) and arrivals.read(disc)[0] == 0  # undecided
+    (w,) = arrivals.weights(disc, f)
+    out = arrivals.columns(disc)[0][0] > 0  # the walks from the left: seen through
+    assert out.any() and not out.all() and not out[h == 0].any()
+    assert w.sum() == pytest.approx(1.0) and np.all(w[out] == 0)
+    assert w[~out] == pytest.approx(prior[~out] / prior[~out].sum())
+    decided = Arrivals(MOVING, images=1)  # read decides (a walk of 0.4): nothing left to draw
+    decided.remember(_seen(decided, [(3.0, -0.4, 0.25)], hidden=0.06))
+    assert decided.read(disc)[0] != 0 and not decided.weights(disc, f).any()
+    assert not arrivals.weights(disc, 0.0).any()
+    assert not Arrivals(SimConfig()).weights(disc, f).any()  # the static course: nothing walks
+
+
+def test_a_sampling_planner_ranks_first_primitives_by_the_safe_steps_of_the_walks_it_draws(monkeypatch):
+    """With ``samples``, each decision draws the undecided first sights' walks from their weights and
+    ranks first primitives by the mean safe steps over the draws (ties: the plain ranking). Weights
+    that put everything on one walk give exactly the ranking of that walk; the static course draws
+    nothing and chooses as the plain tracker."""
+    from husky_course.config import get_profile, with_world
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.mapping import MappingPlanner
+    from husky_course.planners.tracking import TrackingPlanner, _ranked
+    from husky_course.sim.fast import FastSimulator
+
+    h = Arrivals(MOVING).hypotheses
+    walk = float(h[np.argmin(np.abs(h - 0.4))])
+    one_walk = (h == walk).astype(float)
+    monkeypatch.setattr(Arrivals, "weights", lambda self, discs, fraction: np.tile(
+        one_walk, (len(np.atleast_2d(discs)), 1)) * (fraction > 0))
+    checked, differs = [], []
+
+    class Checked(TrackingPlanner):
+        def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
+            choice, ranked = super()._decide(horizon)
+            group, weights = self.map.walk_doubt
+            if len(weights):
+                keys = MappingPlanner._decide(self, horizon)[1]
+                speed = np.where(group >= 0, walk, 0.0)
+                expect = _ranked(self._hypothesis(horizon, speed), keys)
+                checked.append(choice == expect[0] and np.array_equal(ranked, expect[1]))
+                differs.append(not np.array_equal(ranked, _ranked(self._hypothesis(horizon, 0.0), keys)[1]))
+            return choice, ranked
+
+    moving = with_world(get_profile("quick"), "moving").sim
+    sim = FastSimulator(moving)
+    for seed in eval_world_seeds(3, 1):
+        run_episode(Checked(moving, samples=2), sim, int(seed))
+    assert checked and all(checked) and any(differs)
+    static = get_profile("quick").sim
+    sim = FastSimulator(static)
+    plain, sampled = ([run_episode(TrackingPlanner(static, samples=n), sim, int(s)).actions
+                       for s in eval_world_seeds(3, 1)] for n in (0, 4))
+    assert plain == sampled
+    with pytest.raises(ValueError, match="samples"):
+        TrackingPlanner(moving, samples=-1)

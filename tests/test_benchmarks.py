@@ -79,9 +79,10 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_doubt.py": (
         ["--profile", "quick", "--worlds", "3", "--workers", "1", "--planners", "tracking",
-         "--settings", "off,hard 0.5,hedge"],
+         "--settings", "off,hard 0.5,hedge,samples 16"],
         rf"3 worlds of {TUNING}[\s\S]*tracking +hard 0.5 +\d\.\d{{3}} .*only without: \d+"
-        r"[\s\S]*tracking +hedge +\d\.\d{3} .*only without: \d+",
+        r"[\s\S]*tracking +hedge +\d\.\d{3} .*only without: \d+"
+        r"[\s\S]*tracking +samples 16 +\d\.\d{3} .*only without: \d+",
     ),
     "exp_moving_ladder.py": (
         ["--profile", "quick", "--worlds", "3"],

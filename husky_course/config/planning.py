@@ -134,3 +134,14 @@ class ArrivalsConfig:
     #: 0.778 / 0.771 with 16 / 32 draws (worlds won only with / only without: 15 / 7, 21 / 20), the
     #: tracker 0.735 off, 0.728 with 16. A first prototype's 0.784 (20 / 6) came from its own draws.
     first_samples: int = 0
+    #: every decision, choose the first primitive by its mean safe steps over this many draws of walks for
+    #: the last image's first sights that the earlier images leave undecided, each from the course's
+    #: motion model over the walks no earlier column saw through (``TrackingPlanner._decide``,
+    #: :meth:`~husky_course.planners.arrivals.Arrivals.weights`; 0: off; the disc planner's). Off: on
+    #: four slices of 1,000 moving tuning worlds (full profile; worlds 0-999 / ... / 3,000-3,999) a
+    #: prototype with 16 draws crossed 0.809 / 0.802 / 0.814 / 0.795 against 0.798 / 0.793 / 0.811 /
+    #: 0.797 (won only with / only without: 22 / 13, 25 / 16, 27 / 24, 20 / 22; pooled 94 / 75, p = 0.17),
+    #: 32 draws 0.807 (34 / 25) on the first slice, and this code's own draws 0.802 (23 / 19) there: no
+    #: gain that can be shown, at about four times the time per decision
+    samples: int = 0
+    tracker_samples: int = 0  #: the tracker's ``samples`` (not measured: off as the disc planner's)

@@ -25,6 +25,10 @@ least) decide: a walk one way (their mean), or standing; else the rule above sta
 tuning set (evaluation set 1, full profile, the disc planner; ``benchmarks/exp_moving_evidence.py``):
 on worlds 0-999 / 1,000-1,999 / 2,000-2,999 the rule above crossed 0.780 / 0.776 / 0.795, with the
 previous image's evidence 0.794 / 0.788 / 0.802, with the last three images' 0.798 / 0.793 / 0.811.
+
+:meth:`Arrivals.weights` gives, for a first sight both rules leave standing undecided, the course's
+motion model over the hypotheses no column saw through: what a planner that hedges draws its walk
+from (:class:`~husky_course.config.ArrivalsConfig`'s ``samples``, off: the measurements are there).
 """
 
 from __future__ import annotations
@@ -100,23 +104,49 @@ class Arrivals:
         out = np.full(len(discs), np.nan)
         if not self.images or len(self.hypotheses) < 2:
             return out
-        tol, far, h = self.evidence_tolerance, self.camera.far, self.hypotheses
-        for k, (x, y, r) in enumerate(discs):
-            through, match = np.zeros(len(h), int), np.zeros(len(h), int)
-            for age, (depth, shift) in enumerate(self.history[: self.images], start=1):
-                front = self.front(x + shift[0], y + shift[1] - h * age, r)  # (hypotheses, size)
-                near = front < far - tol
-                with np.errstate(invalid="ignore"):  # inf - inf off the circle: masked by ``near``
-                    through += np.sum(near & (depth > front + tol), axis=1)
-                    match += np.sum(near & (np.abs(depth - front) <= tol), axis=1)
-            left = through == 0
-            if not left.any() or match[left].max() < 1:
+        through, match = self.columns(discs)
+        for k in range(len(discs)):
+            left = through[k] == 0
+            if not left.any() or match[k, left].max() < 1:
                 continue
-            best = h[left & (match == match[left].max())]
+            best = self.hypotheses[left & (match[k] == match[k, left].max())]
             if np.all(best > 0) or np.all(best < 0):
                 out[k] = float(best.mean())
             elif np.all(best == 0):
                 out[k] = 0.0
+        return out
+
+    def columns(self, discs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(through, match)``, each ``(k, hypotheses)``: per disc of ``discs (k, 3)`` and hypothesis,
+        the columns of the last :attr:`images` images that saw through its circle, and that matched it."""
+        discs = np.asarray(discs, float).reshape(-1, 3)
+        tol, far, h = self.evidence_tolerance, self.camera.far, self.hypotheses
+        through, match = np.zeros((len(discs), len(h)), int), np.zeros((len(discs), len(h)), int)
+        for k, (x, y, r) in enumerate(discs):
+            for age, (depth, shift) in enumerate(self.history[: self.images], start=1):
+                front = self.front(x + shift[0], y + shift[1] - h * age, r)  # (hypotheses, size)
+                near = front < far - tol
+                with np.errstate(invalid="ignore"):  # inf - inf off the circle: masked by ``near``
+                    through[k] += np.sum(near & (depth > front + tol), axis=1)
+                    match[k] += np.sum(near & (np.abs(depth - front) <= tol), axis=1)
+        return through, match
+
+    def weights(self, discs: np.ndarray, fraction: float) -> np.ndarray:
+        """``(k, hypotheses)``: for each first-sight disc of ``discs (k, 3)`` that :meth:`read` leaves
+        standing undecided (neither the columns' evidence nor the centre rule decides), the course's
+        motion model (standing ``1 - fraction``, each walk an equal share of ``fraction``) over the
+        hypotheses no column of the last :attr:`images` images saw through, normalised; a row of
+        zeros where :meth:`read`'s velocity stands (decided, or every hypothesis seen through)."""
+        discs = np.asarray(discs, float).reshape(-1, 3)
+        h = self.hypotheses
+        out = np.zeros((len(discs), len(h)))
+        if len(h) < 2 or not len(discs) or fraction <= 0:
+            return out
+        prior = np.r_[1.0 - fraction, np.full(len(h) - 1, fraction / (len(h) - 1))]
+        left = self.columns(discs)[0] == 0 if self.images else np.ones(out.shape, bool)
+        open_ = np.isnan(self.evidence(discs)) & (self.speeds(discs) == 0) & left.any(1)
+        w = prior * left
+        out[open_] = w[open_] / w[open_].sum(1, keepdims=True)
         return out
 
     def front(self, x: float, y: np.ndarray, r: float) -> np.ndarray:

@@ -295,6 +295,8 @@ class WalkingMap:
         self.arrivals = Arrivals(config, images=images) if arrivals else None
         self.velocity = np.empty(0)  #: per point, m per step along y
         self.fresh = np.zeros(0, bool)  #: per point: its piece was seen once (its velocity unknown)
+        self.walks = float(getattr(config.world, "moving_fraction", 0.0))
+        self._doubt: tuple[np.ndarray, list[np.ndarray]] = (np.zeros(0, int), [])
 
     @property
     def points(self) -> np.ndarray:
@@ -311,19 +313,34 @@ class WalkingMap:
         self.motion.reset()
         self.velocity, self.fresh = np.empty(0), np.zeros(0, bool)
         self.faces, self.wall = NO_WALLS, np.zeros(0, bool)
+        self._doubt = (np.zeros(0, int), [])
         if self.arrivals is not None:
             self.arrivals.reset()
+
+    @property
+    def walk_doubt(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(group, weights)``: per point, which of ``weights``' rows its walk is drawn from (-1: none),
+        and per row the weights over :attr:`arrivals`' hypotheses: the last scan's first-sight pieces
+        the earlier images leave undecided (:meth:`~.arrivals.Arrivals.weights`), as the disc map's."""
+        group, rows = self._doubt
+        h = len(self.arrivals.hypotheses) if self.arrivals is not None else 0
+        return np.r_[group, np.full(len(self.velocity) - len(group), -1)], np.array(rows).reshape(-1, h)
 
     def add(self, obs: np.ndarray) -> np.ndarray:
         """Merge the scan of ``obs``; return its points' velocities (they come first in :attr:`points`)."""
         now = self.map.scan(obs)
         v = self.motion.update(now)
         m, wall = self.motion, np.zeros(len(now), bool)
+        group, rows = np.full(len(now), -1), []
         for idx in segments(now, 0.3, m.spacing):  # the pieces :class:`Tracks` was given
             wall[idx] = np.ptp(now[idx], axis=0).max() > 1.0  # left untracked: a wall, or several things
             if self.arrivals is not None and m.tracks.fresh[idx].all() and not wall[idx[0]]:
                 disc = np.r_[piece_centre(now[idx], m.camera_x, m.radius), m.radius]  # a first sight:
                 v[idx] = self.arrivals.read(disc[None])[0]  # did it walk into space seen free?
+                w = self.arrivals.weights(disc[None], self.walks)[0]
+                if w.any():  # undecided: its walk is drawn where a planner hedges (``samples``)
+                    group[idx], rows = len(rows), [*rows, w]
+        self._doubt = (group, rows)
         if self.arrivals is not None:
             self.arrivals.remember(self.map.scan.columns(obs))
         kept = self.map.add(obs)
@@ -344,6 +361,7 @@ class WalkingMap:
         if self.arrivals is not None:
             self.arrivals.move(dx, dy)
         self.velocity, self.fresh, self.wall = self.velocity[kept], self.fresh[kept], self.wall[kept]
+        self._doubt = (np.zeros(0, int), [])  # the scan's doubt is for its decision
         if self.bounce:  # the faces read again (dead reckoning shifts the previous ones)
             previous = (self.faces[0] - dy, self.faces[1] - dy)
             self.faces = wall_faces(self.map.points[self.wall], self.width, previous, self.wall_rule)

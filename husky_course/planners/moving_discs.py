@@ -41,12 +41,15 @@ class WalkingDiscMap(DiscMap):
         self.widen = float(widen)
         self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
         self.width, self.faces, self.wall_rule = (config or SimConfig()).world.width, NO_WALLS, WallsConfig()
+        self.walks = float(getattr((config or SimConfig()).world, "moving_fraction", 0.0))
+        self.doubt = np.zeros((0, len(self.arrivals.hypotheses)))
 
     def reset(self) -> None:
         super().reset()
         self.motion.reset()
         self.speeds, self.fresh, self.faces = np.empty(0), np.zeros(0, bool), NO_WALLS
         self.arrivals.reset()
+        self.doubt = np.zeros((0, len(self.arrivals.hypotheses)))
 
     @property
     def points(self) -> np.ndarray:
@@ -61,6 +64,16 @@ class WalkingDiscMap(DiscMap):
         """Per point of :attr:`points`: the discs' velocities (m per step along ``y``), then 0."""
         return np.r_[self.speeds, np.zeros(len(self.points) - len(self.speeds))]
 
+    @property
+    def walk_doubt(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(group, weights)``: per point of :attr:`points`, which of ``weights``' rows its walk is drawn
+        from (-1: none), and per row the weights over :attr:`arrivals`' hypotheses: the last image's
+        first sights that the earlier images leave undecided (:meth:`Arrivals.weights`)."""
+        open_ = np.flatnonzero(self.doubt.any(1))
+        group = np.full(len(self.points), -1)
+        group[open_] = np.arange(len(open_))
+        return group, self.doubt[open_]
+
     def add(self, obs: np.ndarray) -> None:
         d, cols, pts, pieces = self.reader.pieces(obs)
         v = self.motion.update(pts)
@@ -69,10 +82,14 @@ class WalkingDiscMap(DiscMap):
         speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
         first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
         speed, first = self.first_sights(discs, cyl, speed, first)
+        doubt = np.zeros((len(discs), len(self.arrivals.hypotheses)))
+        if self.arrive and first.any():
+            doubt[first] = self.arrivals.weights(discs[first], self.walks)
         self.arrivals.remember(d)
         kept = self._merge(obs, d, discs[cyl], other)
         self.speeds = np.r_[speed[cyl], self.speeds[kept]]
         self.fresh = np.r_[first[cyl], self.fresh[kept]]
+        self.doubt = np.r_[doubt[cyl], np.zeros((int(kept.sum()), doubt.shape[1]))]
 
     def first_sights(self, discs: np.ndarray, cyl: np.ndarray, speed: np.ndarray,
                      first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +107,7 @@ class WalkingDiscMap(DiscMap):
         self.arrivals.move(dx, dy)
         kept = super().move(dx, dy)
         self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
+        self.doubt = np.zeros((int(kept.sum()), self.doubt.shape[1]))  # the image's doubt is for its decision
         self.faces = wall_faces(self.walls.points, self.width, (self.faces[0] - dy, self.faces[1] - dy),
                                 self.wall_rule)
         self.discs[:, 1], self.speeds = walk_on(self.discs, self.speeds, self.faces)
@@ -111,11 +129,12 @@ class DiscTrackingPlanner(DiscPlanner):
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
                  doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
-                 first_samples: int = ArrivalsConfig.first_samples, **kwargs: float) -> None:
+                 first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
+                 **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
-        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples)
 
     @property
     def doubtful(self) -> np.ndarray:

@@ -283,6 +283,8 @@ class _ToldMap(WalkingDiscMap):
         if self.rule == TOLD_RULES[2]:
             self.discs, self.speeds = cyl[self.seen], vy[self.seen]
             self.fresh = np.zeros(len(self.seen), bool)
+        self.doubt = np.zeros((len(self.discs), self.doubt.shape[1]))  # every rule tells first sights
+        if self.rule == TOLD_RULES[2]:
             return
         if not len(self.discs):
             return

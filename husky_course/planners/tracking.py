@@ -53,11 +53,11 @@ class TrackingPlanner(MappingPlanner):
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples,
                  evidence_images: int = ArrivalsConfig.tracker_images, bounce: bool = WallsConfig.tracker,
-                 **kwargs: float) -> None:
+                 samples: int = ArrivalsConfig.tracker_samples, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(  # type: ignore[assignment]
             self.config, self.map.forget_behind, arrivals, evidence_images, bounce)
-        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples)
 
     @property
     def velocity(self) -> np.ndarray:
@@ -115,16 +115,22 @@ class TrackingPlanner(MappingPlanner):
         return check
 
     def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
-        """The mapping planner's choice, but at the episode's first decision (with ``first_samples``)
-        and with ``hedge`` the first primitive is chosen over hypotheses for the doubtful points.
+        """The mapping planner's choice, but where first sights are in doubt (with ``samples``, or
+        ``first_samples`` at the episode's first decision, or ``hedge``) the first primitive is chosen
+        over hypotheses for them.
 
+        * ``samples`` (every decision): the map's :attr:`~.moving_discs.WalkingDiscMap.walk_doubt` gives
+          the last image's first sights that the earlier images leave undecided, each with weights over
+          the hypotheses of :class:`~husky_course.planners.arrivals.Arrivals` (the course's motion
+          model over the walks no earlier column saw through). Each of ``samples`` draws gives every
+          one of them a walk; the first primitive whose plans survive the most steps on average over
+          the draws wins, ties going to the rank of the map's own velocities. Drawn from the episode's
+          number and the decision's.
         * ``first_samples``: the first decision has one image, so every cylinder in view is a first
           sight the arrivals rule cannot judge. Each of ``first_samples`` samples draws, for every
           doubtful piece on its own (points closer than 0.3 m to one another: one disc, or one
           cylinder's scan points), the course's motion model (it walks with the course's share of
-          walking cylinders, either way, at a speed uniform in ``speed_range``); the first primitive
-          whose plans survive the most steps on average over the samples wins, ties going to the
-          standing hypothesis's rank. Samples are drawn from the episode's own number.
+          walking cylinders, either way, at a speed uniform in ``speed_range``); ranked as above.
         * ``hedge`` (every decision): the expectation over three hypotheses for all doubtful points
           at once (all standing, all walking left, all walking right at the course's mean speed),
           weighted by the course's share of walking cylinders.
@@ -135,6 +141,14 @@ class TrackingPlanner(MappingPlanner):
         if not walks or not doubtful.any():
             return choice, keys
         lo, hi = self.config.world.speed_range  # type: ignore[attr-defined]
+        group, weights = self.map.walk_doubt if self.samples else (None, ())
+        if len(weights):
+            rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
+            total = np.zeros(len(keys))
+            for _ in range(self.samples):
+                drawn = h[[rng.choice(len(h), p=w) for w in weights]]
+                total += self._hypothesis(horizon, np.where(group >= 0, drawn[group], 0.0))
+            return _ranked(total / self.samples, keys)
         if self.first_samples and self._remaining == self._length:
             rng, piece = np.random.default_rng(self._key), _pieces(self.points[doubtful])
             total, n = np.zeros(len(keys)), int(piece.max()) + 1
@@ -143,9 +157,7 @@ class TrackingPlanner(MappingPlanner):
                 walking = rng.random(n) < walks
                 speed[doubtful] = (walking * rng.choice((-1.0, 1.0), n) * rng.uniform(lo, hi, n))[piece]
                 total += self._hypothesis(horizon, speed)
-            mean = np.round(total / self.first_samples, 6)
-            ranked = np.where(keys > -1e8, mean * 1e8 + keys, keys)  # the mean first, then the rank
-            return int(np.argmax(ranked)), ranked
+            return _ranked(total / self.first_samples, keys)
         if not self.hedge:
             return choice, keys
         expected = (1 - walks) * _steps(keys)
@@ -170,6 +182,12 @@ def _steps(keys: np.ndarray) -> np.ndarray:
     return np.where(keys > -1e8, np.floor((keys + 5e5) / 1e6), 0.0)
 
 
+def _ranked(mean: np.ndarray, keys: np.ndarray) -> tuple[int, np.ndarray]:
+    """The first primitive with the most mean safe steps ``mean`` over draws, ties to ``keys``' rank."""
+    ranked = np.where(keys > -1e8, np.round(mean, 6) * 1e8 + keys, keys)
+    return int(np.argmax(ranked)), ranked
+
+
 def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
     """Which piece ``(m,)`` (numbered from 0) each of ``points (m, 2+)`` belongs to: chains of points
     closer than ``gap`` to one another."""
@@ -184,11 +202,12 @@ def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
 
 
 def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool,
-               first_samples: int) -> None:
+               first_samples: int, samples: int) -> None:
     """The settings for first sights the arrivals rule leaves standing (:class:`ArrivalsConfig`)."""
     planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
-    if int(first_samples) != first_samples or first_samples < 0:
-        raise ValueError(f"first_samples must be a whole number >= 0, got {first_samples!r}")
-    planner.first_samples = int(first_samples)
+    for name, value in (("first_samples", first_samples), ("samples", samples)):
+        if int(value) != value or value < 0:
+            raise ValueError(f"{name} must be a whole number >= 0, got {value!r}")
+    planner.first_samples, planner.samples = int(first_samples), int(samples)
     planner.max_walk = float(getattr(planner.config.world, "speed_range", (0.0, 0.0))[1])
     planner._doubt_speed: float | np.ndarray | None = None
