@@ -178,6 +178,8 @@ display(Markdown(
 # into free space; when every guess left walks one way, it gets their mean speed. Otherwise it is
 # taken as standing until the next image. The planners without learning (`tracking`) and with
 # learned discs (`discs`) both use this rule; the memory student reads *seen once* instead.
+# The disc planner's tracks locate a cylinder by its network's disc centre instead of the fitted
+# circle, which the network places more precisely across the view.
 # The disc planner reads more of those images. Its network gives a first sight's centre and radius,
 # so each guess predicts the depth of every column the cylinder would have covered in each of the
 # last three images. A column that saw through it rules the guess out. A column that saw its front

@@ -163,3 +163,64 @@ def test_motion_memory_follows_a_walking_cylinder_as_the_robot_drives():
     for k in range(2):
         assert (still.update(_arc((4.0 - k, 0.4 * k), 0.3)) == 0).all() and not still.tracks.fresh.any()
         still.move(1.0, 0.0)
+
+
+def test_tracks_locate_a_piece_by_the_centre_they_are_given():
+    """Given a centre per piece (the disc planner's network), a track's looks are those centres, not
+    the fitted circle's: a standing cylinder whose given centres walk 0.4 m per step reads as walking;
+    a ``nan`` centre leaves the fit, and without centres it stands."""
+    from husky_course.planners.motion import MotionMemory, piece_centre
+
+    told, fitted, partly = MotionMemory(MOVING.sim), MotionMemory(MOVING.sim), MotionMemory(MOVING.sim)
+    for k in range(3):
+        scan = _arc((4.0 - k, -0.5), 0.3)  # standing: the robot drove k metres towards it
+        pieces = [np.arange(len(scan))]
+        v = told.update(scan, pieces, np.array([[4.0 - k, -0.5 + 0.4 * k]]))
+        np.testing.assert_allclose(told.tracks.tracks[0][-1, 1:3], [4.0 - k, -0.5 + 0.4 * k])
+        np.testing.assert_allclose(v, 0.4 if k else 0.0, atol=1e-6)
+        assert (fitted.update(scan) == 0).all()
+        partly.update(scan, pieces, np.full((1, 2), np.nan))
+        fit = piece_centre(scan, partly.camera_x, partly.radius)
+        np.testing.assert_allclose(partly.tracks.tracks[0][-1, 1:3], fit)
+        for memory in (told, fitted, partly):
+            memory.move(1.0, 0.0)
+
+
+def test_the_disc_maps_tracks_follow_its_network_centres_of_cylinder_pieces_only():
+    """The disc map hands its tracks the network's disc centre of each piece it reads as a cylinder
+    (``TrackingConfig.disc_centres``), and the fit for the others; switched off, the fit for all."""
+    import torch
+
+    from husky_course.config import TrackingConfig
+    from husky_course.models.discs import DiscNet
+    from husky_course.planners.motion import piece_centre
+    from husky_course.planners.moving_discs import DiscTrackingPlanner
+
+    assert TrackingConfig.disc_centres
+    sim = FastSimulator(MOVING.sim)
+    world = sim.load(int(eval_world_seeds(1, 1)[0]))
+    obs = sim.depth(world.start[None], 0.0)[0]
+    looked = {}
+    for centres in (True, False):
+        torch.manual_seed(0)
+        disc_map = DiscTrackingPlanner(DiscNet(MOVING.sim.world.radius_range).eval(), MOVING.sim,
+                                       centres=centres).map
+        net = disc_map.forward
+
+        def alternate(x: np.ndarray, net=net) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            logit, offset, radius = net(x)  # every other piece a cylinder, the rest not
+            return np.where(np.arange(len(logit)) % 2, 1.0, -1.0) * np.abs(logit), offset, radius
+
+        disc_map.forward = alternate
+        d, cols, pts, pieces = disc_map.reader.pieces(obs)
+        discs, cyl, _ = disc_map.decode(d, cols, pts, pieces)
+        small = [k for k, idx in enumerate(pieces) if np.ptp(pts[idx], axis=0).max() <= 1.0]
+        assert cyl[small].any() and not cyl[small].all()  # both kinds, for the check to mean something
+        disc_map.add(obs)
+        looks = np.array([t[-1, 1:3] for t in disc_map.motion.tracks.tracks])
+        fits = np.array([piece_centre(pts[pieces[k]], disc_map.motion.camera_x, disc_map.motion.radius)
+                         for k in small])
+        expect = np.where(cyl[small, None] & centres, discs[small, :2], fits)
+        np.testing.assert_allclose(looks, expect)
+        looked[centres] = looks
+    assert not np.allclose(looked[True], looked[False])

@@ -23,12 +23,11 @@ This planner learns that step. Every image:
 4. the mapping planner's exact lattice search plans over discs and points.
 
 On the moving course (:mod:`~husky_course.planners.moving_discs`) the discs walk with the
-velocities the tracker reads off successive scans, a first sight as the last three images' columns
-place it (:mod:`~husky_course.planners.arrivals`), and the search runs in space-time as the
-tracker's does.
-Tracking the network's centres (1 cm median lateral error against the fitted circles' 3 cm) was
-not shown to help: 0.727 against 0.737 (300 worlds, no arrivals rule); with the columns' evidence,
-on three slices of 1,000 tuning worlds 0.805 / 0.801 / 0.815, without 0.798 / 0.793 / 0.811 (p = 0.2).
+velocities the tracker's tracks read off successive scans, each cylinder's piece located by this
+network's disc centre (1 cm median lateral error within 3 m, against the fitted circle's 3 cm:
+:class:`~husky_course.config.TrackingConfig`'s ``disc_centres`` gives the measurements), a first
+sight as the last three images' columns place it (:mod:`~husky_course.planners.arrivals`), and the
+search runs in space-time as the tracker's does.
 ``benchmarks/exp_moving_ladder.py`` splits the gap on 300 moving tuning worlds: told the truth for
 its first sights alone this planner crosses 0.867 (0.777 as it is), for every disc 0.887, and with
 every cylinder seen so far handed to its search exactly 0.940 (the perfect-perception reference:

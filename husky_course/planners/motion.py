@@ -192,13 +192,20 @@ class Tracks:
             sigma *= 3.0
         return np.array([cx, cy, sigma])
 
-    def update(self, pieces: list[np.ndarray], now: np.ndarray) -> np.ndarray:
-        """One image's pieces (index arrays into ``now (m, 2)``): the velocity ``(m,)`` of every point."""
+    def update(self, pieces: list[np.ndarray], now: np.ndarray,
+               centres: np.ndarray | None = None) -> np.ndarray:
+        """One image's pieces (index arrays into ``now (m, 2)``): the velocity ``(m,)`` of every point.
+        ``centres (pieces, 2)``, where finite, locate a piece instead of its fitted circle (the disc
+        planner's network; the sighting keeps the fit's ``sigma``)."""
         v = np.zeros(len(now))
         for t in self.tracks:
             t[:, 0] += 1
-        pieces = [idx for idx in pieces if np.ptp(now[idx], axis=0).max() <= 1.0]
+        small = [k for k, idx in enumerate(pieces) if np.ptp(now[idx], axis=0).max() <= 1.0]
+        pieces = [pieces[k] for k in small]
         seen = np.array([self.sighting(now[idx]) for idx in pieces]).reshape(-1, 3)
+        if centres is not None and len(small):
+            told = np.asarray(centres, float)[small]
+            seen[:, :2] = np.where(np.isfinite(told), told, seen[:, :2])
         cost = np.full((len(pieces), len(self.tracks)), np.inf)
         for k, t in enumerate(self.tracks):
             y = self.line(t)[0]
@@ -257,11 +264,15 @@ class MotionMemory:
         self.previous, self.velocity = np.empty((0, 2)), np.empty(0)
         self.tracks.reset()
 
-    def update(self, now: np.ndarray) -> np.ndarray:
-        """Velocities ``(m,)`` of the current scan ``now`` ``(m, 2)``; ``now`` becomes the previous scan."""
+    def update(self, now: np.ndarray, pieces: list[np.ndarray] | None = None,
+               centres: np.ndarray | None = None) -> np.ndarray:
+        """Velocities ``(m,)`` of the current scan ``now`` ``(m, 2)``; ``now`` becomes the previous scan.
+        ``pieces``: its cut, when the caller has made it (:func:`segments`); ``centres``: per piece, a
+        centre that locates it instead of its fitted circle (``nan``: the fit; :meth:`Tracks.update`)."""
         now = np.asarray(now, float)[:, :2]
         if self.max_step > 0:
-            v = self.tracks.update(segments(now, 0.3, self.spacing), now)
+            cut = segments(now, 0.3, self.spacing) if pieces is None else pieces
+            v = self.tracks.update(cut, now, centres)
         else:  # the static course: nothing walks
             v, self.tracks.fresh = np.zeros(len(now)), np.zeros(len(now), bool)
         self.previous, self.velocity = now.copy(), v

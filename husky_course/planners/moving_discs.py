@@ -2,7 +2,8 @@
 
 :class:`WalkingDiscMap` is the disc map (:class:`~husky_course.planners.discs.DiscMap`) whose discs
 carry lateral velocities: read off successive scans by the tracker's
-:class:`~husky_course.planners.motion.MotionMemory`, a first sight's by the earlier images' columns
+:class:`~husky_course.planners.motion.MotionMemory` (its tracks locating each cylinder's piece by
+the network's disc centre, not a fitted circle), a first sight's by the earlier images' columns
 (:meth:`~husky_course.planners.arrivals.Arrivals.read`), bouncing off the side walls' faces
 (:mod:`~husky_course.planners.walls`). :class:`DiscTrackingPlanner` searches it in space-time as the
 tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points.
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ArrivalsConfig, SimConfig, WallsConfig
+from ..config import ArrivalsConfig, SimConfig, TrackingConfig, WallsConfig
 from ..models.discs import DiscNet
 from .arrivals import Arrivals
 from .discs import DiscMap, DiscPlanner
@@ -27,16 +28,19 @@ class WalkingDiscMap(DiscMap):
     """A :class:`DiscMap` whose discs walk (the moving course, chapter 10).
 
     Each new disc carries the lateral velocity of its piece, read off successive scans by the
-    tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's
-    points; a first sight's from the earlier images, :meth:`first_sights`); after every step a
+    tracker's :class:`~husky_course.planners.motion.MotionMemory` (the mean over the piece's points;
+    with ``centres`` its tracks locate a cylinder's piece by the disc's centre, not a fitted circle;
+    a first sight's from the earlier images, :meth:`first_sights`); after every step a
     remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
     course every velocity is 0 and it is the :class:`DiscMap`. ``faces``: the walls' (:mod:`.walls`).
     """
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
-                 unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True) -> None:
+                 unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
+                 centres: bool = TrackingConfig.disc_centres) -> None:
         super().__init__(model, config, forget_behind, unexplained)
         self.motion = MotionMemory(config or SimConfig())
+        self.centres = bool(centres)  #: the tracks locate a cylinder's piece by its disc's centre
         self.arrivals, self.arrive = Arrivals(config or SimConfig()), bool(arrivals)
         self.widen = float(widen)
         self.speeds, self.fresh = np.empty(0), np.zeros(0, bool)
@@ -76,9 +80,10 @@ class WalkingDiscMap(DiscMap):
 
     def add(self, obs: np.ndarray) -> None:
         d, cols, pts, pieces = self.reader.pieces(obs)
-        v = self.motion.update(pts)
-        fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
         discs, cyl, other = self.decode(d, cols, pts, pieces)
+        centres = np.where(cyl[:, None] & self.centres, discs[:, :2], np.nan)  # the tracks' sightings
+        v = self.motion.update(pts, pieces, centres)
+        fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
         speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)
         first = np.array([fresh[i].all() for i in pieces], bool) if pieces else np.zeros(0, bool)
         speed, first = self.first_sights(discs, cyl, speed, first)
@@ -130,10 +135,10 @@ class DiscTrackingPlanner(DiscPlanner):
                  doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
-                 **kwargs: float) -> None:
+                 centres: bool = TrackingConfig.disc_centres, **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
-            model, self.config, self.map.forget_behind, unexplained, widen, arrivals)
+            model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres)
         _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples)
 
     @property
