@@ -29,8 +29,8 @@ network's disc centre (1 cm median lateral error within 3 m, against the fitted 
 sight as the last three images' columns place it (:mod:`~husky_course.planners.arrivals`), and the
 search runs in space-time as the tracker's does.
 ``benchmarks/exp_moving_ladder.py`` splits the gap on 300 moving tuning worlds: told the truth for
-its first sights alone this planner crosses 0.867 (0.777 as it is), for every disc 0.887, and with
-every cylinder seen so far handed to its search exactly 0.940 (the perfect-perception reference:
+its first sights alone this planner crosses 0.870 (0.810 as it is), for every disc 0.893, and with
+every cylinder seen so far handed to its search exactly 0.937 (the perfect-perception reference:
 0.957). A small network reading first sights from the previous image instead of the arrivals rule
 (``benchmarks/exp_moving_first_sight.py``) crossed 0.787, no difference 300 worlds can show.
 
