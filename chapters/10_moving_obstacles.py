@@ -380,8 +380,8 @@ disc = res["discs"]
 only_disc, only_track, p_disc = sign_test(np.array([e.success for e in disc.episodes]),
                                           np.array([e.success for e in track.episodes]))
 text += (
-    f" Chapter 8's disc planner, its network trained on static views and its discs walking with the tracker's "
-    f"velocities, crosses {disc.success_rate:.1%} ({disc.success_rate / orc.success_rate:.0%} of the oracle, "
+    f" Chapter 8's disc planner, its network trained on static views and its discs walking with velocities "
+    f"read by the tracker's tracks (which follow its discs' centres), crosses {disc.success_rate:.1%} ({disc.success_rate / orc.success_rate:.0%} of the oracle, "
     f"{'meeting' if disc.success_rate >= GOAL * orc.success_rate else 'short of'} the goal of {GOAL:.0%}): "
     + ("above the tracker, with intervals that do not overlap" if disc.success_ci95[0] > track.success_ci95[1]
        else "more than the tracker, though the two intervals overlap" if disc.success_rate > track.success_rate
