@@ -67,6 +67,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         ["--profile", "quick", "--worlds", "3", "--planner", "discs"],
         r"discs on 3 moving tuning worlds: success \d\.\d{3}[\s\S]*by what its disc map held",
     ),
+    "exp_moving_fatal.py": (
+        ["--profile", "quick", "--worlds", "6", "--workers", "1"],
+        r"discs on 6 moving tuning worlds: \d+ fatal decisions, \d+ of them the first[\s\S]*"
+        r"fixed by every disc's velocity told: \d+[\s\S]*the disc whose place and velocity alone fixes it",
+    ),
     "exp_moving_first_sight.py": (
         ["--profile", "quick", "--train-worlds", "4", "--worlds", "3", "--epochs", "1", "--workers", "1"],
         rf"first sights in 4 training worlds[\s\S]*held-out loss \d\.\d{{3}}[\s\S]*3 worlds of {TUNING}"
