@@ -284,9 +284,7 @@ class _ToldMap(WalkingDiscMap):
             self.discs, self.speeds = cyl[self.seen], vy[self.seen]
             self.fresh = np.zeros(len(self.seen), bool)
         self.doubt = np.zeros((len(self.discs), self.doubt.shape[1]))  # every rule tells first sights
-        if self.rule == TOLD_RULES[2]:
-            return
-        if not len(self.discs):
+        if self.rule == TOLD_RULES[2] or not len(self.discs):
             return
         gap = np.hypot(self.discs[:, :1] - cyl[:, 0], self.discs[:, 1:2] - cyl[:, 1]) - cyl[:, 2]
         j = np.argmin(gap, axis=1)
