@@ -70,7 +70,13 @@ CASES: dict[str, tuple[list[str], str]] = {
     "exp_moving_fatal.py": (
         ["--profile", "quick", "--worlds", "6", "--workers", "1"],
         r"discs on 6 moving tuning worlds: \d+ fatal decisions, \d+ of them the first[\s\S]*"
-        r"fixed by every disc's velocity told: \d+[\s\S]*the disc whose place and velocity alone fixes it",
+        r"fixed by every disc's velocity told: \d+[\s\S]*the disc whose place and velocity alone fixes it"
+        r"[\s\S]*the lost cylinder whose return alone fixes it",
+    ),
+    "exp_moving_first_decision.py": (
+        ["--profile", "quick", "--worlds", "2", "--draws", "1", "--workers", "1"],
+        r"2 moving tuning worlds, \d with a way through at the start, 1 draws each[\s\S]*"
+        r"the best over the draws \(ties to the planner's\) in \d of \d: fixes \d+, breaks \d+",
     ),
     "exp_moving_first_sight.py": (
         ["--profile", "quick", "--train-worlds", "4", "--worlds", "3", "--epochs", "1", "--workers", "1"],

@@ -150,7 +150,11 @@ class ArrivalsConfig:
     #: prototype with 16 draws crossed 0.809 / 0.802 / 0.814 / 0.795 against 0.798 / 0.793 / 0.811 /
     #: 0.797 (won only with / only without: 22 / 13, 25 / 16, 27 / 24, 20 / 22; pooled 94 / 75, p = 0.17),
     #: 32 draws 0.807 (34 / 25) on the first slice, and this code's own draws 0.802 (23 / 19) there: no
-    #: gain that can be shown, at about four times the time per decision
+    #: gain that can be shown, at about four times the time per decision. Two variants, prototypes on
+    #: worlds 0-999 / 1,000-1,999 / 2,000-2,999 against 0.805 / 0.801 / 0.815 (network centres): 32 draws
+    #: at the first decision only, 0.815 / 0.817 / 0.802 (23 / 13, 30 / 14, 16 / 29); every decision,
+    #: ranked by the share of draws whose plan survives the whole horizon, 0.817 / 0.812 / 0.809 (30 / 18,
+    #: 32 / 21, 24 / 30). Neither gain holds across slices
     samples: int = 0
     #: the tracker's ``samples``. Off: with 16 draws it crossed 0.749 against 0.741 on worlds 0-999 of the
     #: tuning set (38 / 30), at about five times the time per decision
