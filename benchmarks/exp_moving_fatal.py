@@ -28,7 +28,8 @@ fatal decisions, 19 of them the first; every disc's velocity told fixes 36, one 
 time, read as standing, in 24 (14 of them at the first decision), a tracked walker read walking at a
 wrong velocity in 7, a tracked walker read as standing in 4. One lost cylinder given back fixes 27
 (that or one disc's velocity: 56); in 26 of them a disc lay within 1 m of it (a walker's disc that
-drifted off it: 13 out of view, 9 in view; or a disc of a neighbour), only one was forgotten outright.
+drifted off it: 13 out of view, 9 in view; for 5 standing ones, a neighbour's disc or their own off by
+more than ``ON_CYLINDER``), only one was forgotten outright.
 So what the ladder calls memory is mostly discs off their cylinders, not cylinders forgotten.
 """
 
