@@ -84,7 +84,13 @@ class TrackingConfig:
     #: 1,000 moving tuning worlds (full profile; worlds 0-999 / ... / 3,000-3,999) it crossed 0.805 /
     #: 0.801 / 0.815 / 0.812 against the fit's 0.798 / 0.793 / 0.811 / 0.797 (won only with / only
     #: without: 35 / 28, 35 / 27, 37 / 33, 35 / 20; pooled 142 / 108, p = 0.04; the fourth slice was
-    #: run after three had left it at p = 0.2, so that p is a second look)
+    #: run after three had left it at p = 0.2, so that p is a second look). With the centres, none of these
+    #: moved the disc planner on worlds 0-999 (0.805; won only with / only without): ``looks`` 2, 0.798
+    #: (7 / 14); ``error_scale`` 0.15, 0.807 (12 / 10); the centre-located sightings' sigma times 0.5 / 0.25
+    #: (which also tightens the gate), 0.803 / 0.803 (10 / 12, 17 / 19); a track whose line fits badly read
+    #: off its last two looks (walkers that bounced off a wall within 3 steps are off by over 0.1 m per step
+    #: 46.5% of the time, against 8.1%, but are 7% of tracked walkers within 4 m), at two thresholds 0.807 /
+    #: 0.805 (4 / 2, 6 / 6)
     disc_centres: bool = True
 
 
