@@ -210,6 +210,16 @@ display(Markdown(
 # faces read off the points of its long pieces, so that neither planner holds a reading of the
 # course the other lacks (`benchmarks/exp_moving_walls.py` compares both with walks in a straight
 # line on the tuning set).
+# **What the disc planner doubts.** Its map holds one guess of every motion, and the planner knows
+# two ways in which that guess may be wrong: a first sight the earlier images leave undecided may
+# stand or walk, and a tracked walker's speed comes from a few coarse looks. So at every decision it
+# draws versions of the motion (`ArrivalsConfig.samples` of them): each undecided first sight walks
+# as the course's rule of motion allows, among the walks no earlier column saw through, and each
+# tracked walker at its track's speed plus a normal error (spread `ArrivalsConfig.speed_sigma`). It
+# searches every version and takes the first primitive whose plans survive the most steps on
+# average, ties going to its own map's ranking. An average, unlike a worst-case band around every
+# doubtful cylinder, keeps a tight pass that most versions survive; the measurements on the tuning
+# set are in `ArrivalsConfig`. The tracker plans on its map's single guess.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every

@@ -236,3 +236,66 @@ def test_a_sampling_planner_ranks_first_primitives_by_the_safe_steps_of_the_walk
     assert plain == sampled
     with pytest.raises(ValueError, match="samples"):
         TrackingPlanner(moving, samples=-1)
+
+
+def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks():
+    """With ``samples`` and ``speed_sigma``, every draw gives each walker the tracks follow its track's
+    speed plus a normal error of spread ``speed_sigma`` and each undecided first sight a walk from its
+    weights; nothing else (standing discs, walls) moves. The choice is the first primitive with the most
+    mean safe steps over the draws, the same seed draws the same walks, and ``speed_sigma`` 0 draws no
+    error: the first sights' draws alone."""
+    from husky_course.config import get_profile, with_world
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.mapping import MappingPlanner
+    from husky_course.planners.registry import make_planner
+    from husky_course.planners.tracking import _ranked
+    from husky_course.sim.fast import FastSimulator
+
+    profile = with_world(get_profile("quick"), "moving")
+    sim, samples, seeds = FastSimulator(profile.sim), 6, [int(s) for s in eval_world_seeds(6, 1)]
+    errors: list[float] = []
+    decisions: list[bool] = []
+    alone: list[bool] = []  # a decision that draws though no first sight is in doubt
+
+    def checked(sigma: float):
+        planner = make_planner("discs", config=profile.sim, profile=profile, samples=samples,
+                               speed_sigma=sigma)
+        decide, steps_if, draws = planner._decide, planner._steps_if, []
+
+        def record(horizon: int, speeds: np.ndarray) -> np.ndarray:
+            steps = steps_if(horizon, speeds)
+            draws.append((speeds.copy(), steps))
+            return steps
+
+        def check(horizon: int) -> tuple[int, np.ndarray]:
+            draws.clear()
+            choice, ranked = decide(horizon)
+            if draws:
+                group, _ = planner.map.walk_doubt
+                base, tracked = planner.velocity, planner.tracked
+                speeds = np.array([s for s, _ in draws])
+                still = ~(tracked | ((group >= 0) & planner.doubtful))
+                assert len(draws) == samples and (speeds[:, still] == base[still]).all()
+                errors.extend((speeds[:, tracked] - base[tracked]).ravel())
+                keys = MappingPlanner._decide(planner, horizon)[1]
+                expect = _ranked(np.mean([s for _, s in draws], axis=0), keys)
+                decisions.append(choice == expect[0] and np.array_equal(ranked, expect[1]))
+                alone.append(not planner.doubtful.any())
+            return choice, ranked
+
+        planner._steps_if, planner._decide = record, check
+        return planner
+
+    actions = [run_episode(checked(0.05), sim, s).actions for s in seeds]
+    assert decisions and all(decisions) and any(alone)
+    assert len(errors) > 100 and np.std(errors) == pytest.approx(0.05, rel=0.25)
+    assert abs(np.mean(errors)) < 0.02
+    again = [run_episode(make_planner("discs", config=profile.sim, profile=profile, samples=samples,
+                                      speed_sigma=0.05), sim, s).actions for s in seeds]
+    assert again == actions  # the same draws
+    errors.clear()
+    for s in seeds:
+        run_episode(checked(0.0), sim, s)
+    assert not np.any(errors)  # no error drawn: the first sights' draws alone
+    with pytest.raises(ValueError, match="speed_sigma"):
+        make_planner("discs", config=profile.sim, profile=profile, speed_sigma=-0.1)

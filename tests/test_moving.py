@@ -359,7 +359,7 @@ def test_first_decision_samples_the_motion_model_for_its_first_sights_and_only_t
     the draws come from the episode's own number, and on the static course nothing is doubtful, so it
     is the plain tracker. The disc planner (quick network) samples its doubtful discs the same way."""
     sim, samples = FastSimulator(MOVING.sim), 8
-    extra = {"profile": QUICK} if name == "discs" else {}
+    extra = {"profile": QUICK, "samples": 0} if name == "discs" else {}
     lo, hi = MOVING.sim.world.speed_range
     with pytest.raises(ValueError, match="first_samples"):
         make_planner(name, config=MOVING.sim, first_samples=-1, **extra)

@@ -27,8 +27,9 @@ on worlds 0-999 / 1,000-1,999 / 2,000-2,999 the rule above crossed 0.780 / 0.776
 previous image's evidence 0.794 / 0.788 / 0.802, with the last three images' 0.798 / 0.793 / 0.811.
 
 :meth:`Arrivals.weights` gives, for a first sight both rules leave standing undecided, the course's
-motion model over the hypotheses no column saw through: what a planner that hedges draws its walk
-from (:class:`~husky_course.config.ArrivalsConfig`'s ``samples``, off: the measurements are there).
+motion model over the hypotheses no column saw through: what the disc planner draws its walk from
+at every decision (:class:`~husky_course.config.ArrivalsConfig`'s ``samples``; the measurements are
+there).
 """
 
 from __future__ import annotations

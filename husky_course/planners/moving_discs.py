@@ -6,7 +6,9 @@ carry lateral velocities: read off successive scans by the tracker's
 the network's disc centre, not a fitted circle), a first sight's by the earlier images' columns
 (:meth:`~husky_course.planners.arrivals.Arrivals.read`), bouncing off the side walls' faces
 (:mod:`~husky_course.planners.walls`). :class:`DiscTrackingPlanner` searches it in space-time as the
-tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points.
+tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points, over
+draws of what it doubts: the undecided first sights' walks and the tracked walkers' speeds
+(:class:`~husky_course.config.ArrivalsConfig`'s ``samples`` and ``speed_sigma``).
 The measurements behind each choice are in :mod:`~husky_course.planners.discs`,
 :mod:`~husky_course.planners.arrivals` and :class:`~husky_course.config.WallsConfig`.
 """
@@ -124,22 +126,25 @@ class DiscTrackingPlanner(DiscPlanner):
     """The disc planner on the moving course: its discs walk (:class:`WalkingDiscMap`), and it plans
     in space-time exactly as the tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`)
     does over its walking points: standing things on the clearance grid, each walking disc where it
-    is at every sample's time. On the static course it is the :class:`DiscPlanner`."""
+    is at every sample's time; with ``samples``, over draws of its undecided first sights' walks and
+    its tracked walkers' speeds (``speed_sigma``; ``TrackingPlanner._decide``). On the static course
+    nothing walks or is drawn, and it is the :class:`DiscPlanner`."""
 
     name = "discs"
     _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
-    _hypothesis = TrackingPlanner._hypothesis
+    _hypothesis, _steps_if = TrackingPlanner._hypothesis, TrackingPlanner._steps_if
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
                  doubt_steps: float = ArrivalsConfig.doubt_steps,
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
-                 centres: bool = TrackingConfig.disc_centres, **kwargs: float) -> None:
+                 speed_sigma: float = ArrivalsConfig.speed_sigma, centres: bool = TrackingConfig.disc_centres,
+                 **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres)
-        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma)
 
     @property
     def doubtful(self) -> np.ndarray:
@@ -147,6 +152,13 @@ class DiscTrackingPlanner(DiscPlanner):
         m = self.map
         discs = m.fresh & (m.speeds == 0)  # type: ignore[attr-defined]
         return np.r_[discs, np.zeros(len(self.points) - len(discs), bool)]
+
+    @property
+    def tracked(self) -> np.ndarray:
+        """Per point: a disc walking at the speed its track reads (seen before, not a first sight)."""
+        m = self.map
+        walking = ~m.fresh & (m.speeds != 0)  # type: ignore[attr-defined]
+        return np.r_[walking, np.zeros(len(self.points) - len(walking), bool)]
 
     @property
     def velocity(self) -> np.ndarray:

@@ -31,7 +31,8 @@ cost; against "seen so far", what the disc map's own rules cost (chapter 8's lad
 whose walking map is *told* the truth, as much as its ``rule`` gives away (chapter 10's ladder,
 :data:`TOLD_RULES`): the true velocity of its first sights, of every disc, or every cylinder any
 image has rendered so far, exactly. Against the disc planner it measures what its motion estimates
-and its memory cost.
+and its memory cost. Told the first sights' motion, it still draws its tracked walkers' speeds as the
+disc planner does (``ArrivalsConfig.speed_sigma``); told every disc's, it doubts none.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..config import OracleConfig
+from ..config import ArrivalsConfig, OracleConfig
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
 from ..sim.lattice import disc_check, expand, expand_with, rank_plans
@@ -308,8 +309,9 @@ class ToldDiscsPlanner(DiscTrackingPlanner):
             raise ValueError(f"rule must be one of {TOLD_RULES}, got {rule!r}")
         profile = profile or get_profile()
         d = profile.discs
+        sigma = ArrivalsConfig.speed_sigma if rule == TOLD_RULES[0] else 0.0  # every speed told: no doubt
         super().__init__(load_discs(profile)[0], config or with_world(profile, "moving").sim, grow=d.grow,
-                         unexplained=d.unexplained, margin=d.margin)
+                         unexplained=d.unexplained, margin=d.margin, speed_sigma=sigma)
         self.map.__class__ = _ToldMap
         self.map.rule = rule  # type: ignore[attr-defined]
         self.name = f"discs, told {rule} (privileged)"

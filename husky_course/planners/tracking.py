@@ -53,11 +53,12 @@ class TrackingPlanner(MappingPlanner):
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples,
                  evidence_images: int = ArrivalsConfig.tracker_images, bounce: bool = WallsConfig.tracker,
-                 samples: int = ArrivalsConfig.tracker_samples, **kwargs: float) -> None:
+                 samples: int = ArrivalsConfig.tracker_samples,
+                 speed_sigma: float = ArrivalsConfig.tracker_speed_sigma, **kwargs: float) -> None:
         super().__init__(config, horizon, **kwargs)
         self.map = WalkingMap(  # type: ignore[assignment]
             self.config, self.map.forget_behind, arrivals, evidence_images, bounce)
-        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma)
 
     @property
     def velocity(self) -> np.ndarray:
@@ -69,6 +70,11 @@ class TrackingPlanner(MappingPlanner):
         """Per map point: a first sight the arrivals rule left standing (it may yet walk either way)."""
         return self.map.fresh & (self.map.velocity == 0)
 
+    @property
+    def tracked(self) -> np.ndarray:
+        """Per map point: walking, at the speed its track reads (seen before, not a first sight)."""
+        return ~self.map.fresh & (self.map.velocity != 0)
+
     def _start_check(self) -> StartCheck:
         """Standing points read off the path tables as the mapping planner reads them; each walking
         point exactly, where it is at the time of each of every ``path_samples``-th sample of an
@@ -77,9 +83,7 @@ class TrackingPlanner(MappingPlanner):
         fastest walk): the band counts in the clearance a plan is ranked by, and with
         ``doubt_hard`` an edge that enters it is infeasible. With nothing walking or doubtful this
         is the mapping planner's check, number for number."""
-        speeds = self.velocity
-        if self._doubt_speed is not None:  # a hypothesis of :meth:`_decide` for the doubtful points
-            speeds = np.where(self.doubtful, self._doubt_speed, speeds)
+        speeds = self.velocity if self._speeds is None else self._speeds  # or a hypothesis of :meth:`_decide`
         walking = speeds != 0
         points, reach = self.points, self._reach
         standing = points[~walking]
@@ -123,9 +127,11 @@ class TrackingPlanner(MappingPlanner):
           the last image's first sights that the earlier images leave undecided, each with weights over
           the hypotheses of :class:`~husky_course.planners.arrivals.Arrivals` (the course's motion
           model over the walks no earlier column saw through). Each of ``samples`` draws gives every
-          one of them a walk; the first primitive whose plans survive the most steps on average over
-          the draws wins, ties going to the rank of the map's own velocities. Drawn from the episode's
-          number and the decision's.
+          one of them a walk, and every walker its track follows (:attr:`tracked`) its track's speed
+          plus a normal error of spread ``speed_sigma``; the first primitive whose plans survive the
+          most steps on average over the draws wins, ties going to the rank of the map's own
+          velocities. Drawn from the episode's number and the decision's; with neither kind of doubt
+          present, the map's own choice.
         * ``first_samples``: the first decision has one image, so every cylinder in view is a first
           sight the arrivals rule cannot judge. Each of ``first_samples`` samples draws, for every
           doubtful piece on its own (points closer than 0.3 m to one another: one disc, or one
@@ -137,18 +143,27 @@ class TrackingPlanner(MappingPlanner):
         """
         choice, keys = MappingPlanner._decide(self, horizon)
         walks = float(getattr(self.config.world, "moving_fraction", 0.0))
+        if not walks:
+            return choice, keys
+        group, weights = self.map.walk_doubt if self.samples else (None, ())
+        tracked = self.tracked if self.samples and self.speed_sigma > 0 else np.zeros(0, bool)
+        if len(weights) or tracked.any():
+            rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
+            total, base, k = np.zeros(len(keys)), self.velocity, int(tracked.sum())
+            drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
+            for _ in range(self.samples):
+                speeds = base.copy()
+                if drawn_ones is not None:  # the undecided first sights
+                    drawn = h[[rng.choice(len(h), p=w) for w in weights]]
+                    speeds = np.where(drawn_ones, drawn[np.maximum(group, 0)], speeds)
+                if k:
+                    speeds[tracked] += rng.normal(0.0, self.speed_sigma, k)
+                total += self._steps_if(horizon, speeds)
+            return _ranked(total / self.samples, keys)
         doubtful = self.doubtful
-        if not walks or not doubtful.any():
+        if not doubtful.any():
             return choice, keys
         lo, hi = self.config.world.speed_range  # type: ignore[attr-defined]
-        group, weights = self.map.walk_doubt if self.samples else (None, ())
-        if len(weights):
-            rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
-            total = np.zeros(len(keys))
-            for _ in range(self.samples):
-                drawn = h[[rng.choice(len(h), p=w) for w in weights]]
-                total += self._hypothesis(horizon, np.where(group >= 0, drawn[group], 0.0))
-            return _ranked(total / self.samples, keys)
         if self.first_samples and self._remaining == self._length:
             rng, piece = np.random.default_rng(self._key), _pieces(self.points[doubtful])
             total, n = np.zeros(len(keys)), int(piece.max()) + 1
@@ -169,11 +184,16 @@ class TrackingPlanner(MappingPlanner):
     def _hypothesis(self, horizon: int, speed: float | np.ndarray) -> np.ndarray:
         """Safe steps of each first primitive's best plan if the doubtful points walk at ``speed``
         (one number, or one per map point)."""
-        self._doubt_speed = speed
+        return self._steps_if(horizon, np.where(self.doubtful, speed, self.velocity))
+
+    def _steps_if(self, horizon: int, speeds: np.ndarray) -> np.ndarray:
+        """Safe steps of each first primitive's best plan if the map's points walk at ``speeds``
+        (one per point of :attr:`points`)."""
+        self._speeds = speeds
         try:
             return _steps(MappingPlanner._decide(self, horizon)[1])
         finally:
-            self._doubt_speed = None
+            self._speeds = None
 
 
 def _steps(keys: np.ndarray) -> np.ndarray:
@@ -202,12 +222,15 @@ def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
 
 
 def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool,
-               first_samples: int, samples: int) -> None:
-    """The settings for first sights the arrivals rule leaves standing (:class:`ArrivalsConfig`)."""
+               first_samples: int, samples: int, speed_sigma: float) -> None:
+    """The settings for what a planner doubts of its map's motion (:class:`ArrivalsConfig`)."""
     planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
     for name, value in (("first_samples", first_samples), ("samples", samples)):
         if int(value) != value or value < 0:
             raise ValueError(f"{name} must be a whole number >= 0, got {value!r}")
+    if not np.isfinite(speed_sigma) or speed_sigma < 0:
+        raise ValueError(f"speed_sigma must be a finite number >= 0, got {speed_sigma!r}")
     planner.first_samples, planner.samples = int(first_samples), int(samples)
+    planner.speed_sigma = float(speed_sigma)
     planner.max_walk = float(getattr(planner.config.world, "speed_range", (0.0, 0.0))[1])
-    planner._doubt_speed: float | np.ndarray | None = None
+    planner._speeds: np.ndarray | None = None
