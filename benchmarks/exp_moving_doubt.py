@@ -14,7 +14,9 @@ mean safe steps over the draws (:class:`~husky_course.config.ArrivalsConfig`'s `
 the moving course's tuning set (evaluation
 set 1 by default), the disc planner and the tracker with each setting side by side on the same
 worlds: success with its exact 95% interval, and the paired count of worlds won only with / only
-without the band. The disc planner needs its network (``python -m husky_course train discs``).
+without the band. The disc planner runs with its draws off (``samples`` 0, as these rules were
+measured; "samples 16" also draws its tracked walkers' speeds, ``speed_sigma``) and needs its
+network (``python -m husky_course train discs``).
 """
 
 from __future__ import annotations
@@ -47,8 +49,8 @@ def main() -> None:
     for name in args.planners.split(","):
         runs = {}
         for label in args.settings.split(","):
-            extra = {"profile": profile} if name == "discs" else {}
-            planner = make_planner(name, config=sim, **SETTINGS[label], **extra)
+            extra = {"profile": profile, "samples": 0} if name == "discs" else {}  # its draws off
+            planner = make_planner(name, config=sim, **{**extra, **SETTINGS[label]})
             runs[label] = r = evaluate(planner, args.worlds, args.seed, config=sim, progress=False,
                                        workers=args.workers)
             lo, hi = r.success_ci95

@@ -31,6 +31,8 @@ wrong velocity in 7, a tracked walker read as standing in 4. One lost cylinder g
 drifted off it: 13 out of view, 9 in view; for 5 standing ones, a neighbour's disc or their own off by
 more than ``ON_CYLINDER``), only one was forgotten outright.
 So what the ladder calls memory is mostly discs off their cylinders, not cylinders forgotten.
+The figures above were measured before the disc planner drew its tracked walkers' speeds
+(``ArrivalsConfig.speed_sigma``); the script runs the planner as it is now.
 """
 
 from __future__ import annotations
