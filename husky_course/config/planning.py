@@ -158,7 +158,8 @@ class ArrivalsConfig:
     #: 0.805 / 0.801 / 0.815 / 0.812 off (won only with / only without: 46 / 23, 45 / 20, 33 / 33,
     #: 35 / 30; pooled 159 / 106, p = 0.001); its prototype (errors drawn for walkers 1-6 m ahead)
     #: 0.825 / 0.822 / 0.814 / 0.818; the first sights' draws alone (``speed_sigma`` 0), 0.815 / 0.813 /
-    #: 0.810 / 0.816 (23 / 13, 32 / 20, 25 / 30, 26 / 22; pooled 106 / 85, p = 0.15).
+    #: 0.810 / 0.816 (23 / 13, 32 / 20, 25 / 30, 26 / 22; pooled 106 / 85, p = 0.15); 64 draws, 0.827 on
+    #: worlds 0-999 (twice the time).
     #: Earlier measurements, before the network's centres and of the first sights' draws alone: on
     #: four slices of 1,000 moving tuning worlds (full profile; worlds 0-999 / ... / 3,000-3,999) a
     #: prototype with 16 draws crossed 0.809 / 0.802 / 0.814 / 0.795 against 0.798 / 0.793 / 0.811 /
