@@ -176,7 +176,10 @@ class ArrivalsConfig:
     #: planner's runs (300 tuning worlds) the tracks read a walker's speed more than 0.1 m per step off
     #: in 8% of its sightings within 4 m when it had not bounced in the last 3 steps (46% when it had).
     #: ``samples`` above gives the measurements; on worlds 0-999 of the tuning set, with 32 draws (a
-    #: prototype), spreads 0.03 / 0.05 / 0.07 / 0.1 gave 0.827 / 0.825 / 0.826 / 0.815: a plateau
+    #: prototype), spreads 0.03 / 0.05 / 0.07 / 0.1 gave 0.827 / 0.825 / 0.826 / 0.815: a plateau. Drawn
+    #: besides, there: a 0.1 m error of every tracked walker's place along its walk, 0.819; 0.15 m for
+    #: those out of view only, 0.819 (12 / 18 against 0.825); a slow walk (0.2-0.3 m per step, either
+    #: way) for each tracked standing disc 1-5 m ahead with probability 0.1, 0.809 (26 / 42)
     speed_sigma: float = 0.05
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
