@@ -219,7 +219,9 @@ display(Markdown(
 # searches every version and takes the first primitive whose plans survive the most steps on
 # average, ties going to its own map's ranking. An average, unlike a worst-case band around every
 # doubtful cylinder, keeps a tight pass that most versions survive; the measurements on the tuning
-# set are in `ArrivalsConfig`. The tracker plans on its map's single guess.
+# set are in `ArrivalsConfig`. Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py`
+# measures along the planner's own runs, each belief beside the truth (privileged, an analysis tool).
+# The tracker plans on its map's single guess.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every

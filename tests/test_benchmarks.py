@@ -63,6 +63,12 @@ CASES: dict[str, tuple[list[str], str]] = {
          "--eval-worlds", "3", "--store", "{tmp}"],
         rf"3 worlds of {TUNING}, moving course:\n +course's student +success \d\.\d{{3}}",
     ),
+    "exp_moving_beliefs.py": (
+        ["--profile", "quick", "--worlds", "3", "--workers", "1"],
+        rf"discs on 3 moving tuning worlds \({TUNING}\): \d+ first sights, \d+ tracked discs[\s\S]*"
+        r"undecided, at the first decision: \d+; believed to walk \d\.\d{3}, walk \d\.\d{3}[\s\S]*"
+        r"tracked discs on walkers",
+    ),
     "exp_moving_failures.py": (
         ["--profile", "quick", "--worlds", "3", "--planner", "discs"],
         r"discs on 3 moving tuning worlds: success \d\.\d{3}[\s\S]*by what its disc map held",
