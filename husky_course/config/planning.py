@@ -169,7 +169,15 @@ class ArrivalsConfig:
     #: worlds 0-999 / 1,000-1,999 / 2,000-2,999 against 0.805 / 0.801 / 0.815 (network centres): 32 draws
     #: at the first decision only, 0.815 / 0.817 / 0.802 (23 / 13, 30 / 14, 16 / 29); every decision,
     #: ranked by the share of draws whose plan survives the whole horizon, 0.817 / 0.812 / 0.809 (30 / 18,
-    #: 32 / 21, 24 / 30). Neither gain holds across slices
+    #: 32 / 21, 24 / 30). Neither gain holds across slices. Against this code with 32 draws (0.828 on
+    #: worlds 0-999; prototypes there, won only with / only without): each draw's safe steps capped at 3
+    #: before the mean, 0.823 (20 / 25); the draws surviving the whole horizon first, then the mean, 0.829
+    #: (1 / 0); every first sight of the image drawn (those read walking among the walks left their way,
+    #: those whose every walk some column saw through from the course's model), 0.828 (5 / 5); horizon
+    #: 6 / 4, 0.831 / 0.823 (6 / 3, 17 / 22); no unexplained points (``DiscConfig.unexplained`` inf), 0.813
+    #: (19 / 34). Along its runs the undecided first sights are believed to walk as often as they do
+    #: (``benchmarks/exp_moving_beliefs.py``: 0.400 against 0.394 at the first decision, 0.390 against
+    #: 0.398 later, 300 worlds)
     samples: int = 32
     #: m per step: in each of ``samples``' draws, every walker the tracks follow walks at its track's
     #: speed plus a normal error of this spread (0: only the first sights are drawn). Along the disc
@@ -179,7 +187,13 @@ class ArrivalsConfig:
     #: prototype), spreads 0.03 / 0.05 / 0.07 / 0.1 gave 0.827 / 0.825 / 0.826 / 0.815: a plateau. Drawn
     #: besides, there: a 0.1 m error of every tracked walker's place along its walk, 0.819; 0.15 m for
     #: those out of view only, 0.819 (12 / 18 against 0.825); a slow walk (0.2-0.3 m per step, either
-    #: way) for each tracked standing disc 1-5 m ahead with probability 0.1, 0.809 (26 / 42)
+    #: way) for each tracked standing disc 1-5 m ahead with probability 0.1, 0.809 (26 / 42). Against this
+    #: code (0.828 there): each tracked disc's speed drawn from its own track's posterior (the judging's
+    #: model, :meth:`~husky_course.planners.motion.Tracks.judged`: standing, or a walk in ``speed_range``,
+    #: the slope's standard error as judged), 0.833 (17 / 12), but 0.816 on worlds 1,000-1,999 (7 / 17
+    #: against 0.826); with that error halved (along the runs the slopes' median error is 0.34 of their
+    #: standard error, half what a normal error of that spread gives), 0.818 (10 / 20); only the discs
+    #: judged standing drawn so, 0.826 (11 / 13); the tracks' ``error_scale`` 0.25, 0.826 (7 / 9)
     speed_sigma: float = 0.05
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
