@@ -137,3 +137,43 @@ def test_the_trackers_walking_points_bounce_off_the_faces_of_its_wall_points() -
     assert ys[False][0] == pytest.approx(-3.3) and ys[False][2] == NO_WALLS
     assert ys[True][2] == pytest.approx((-3.0, config.world.width - 3.0))
     assert ys[True][0] == pytest.approx(-2.6) and ys[True][1] == pytest.approx(0.6)
+
+
+def test_the_space_time_check_counts_every_walker_within_reach_and_skips_only_the_rest() -> None:
+    """The check skips a walker whose walk stays further than a reach and its radius beside every
+    sample of the states it judges (it could not lower a gap capped at the reach). Against a brute
+    force over every walker and sample, with walkers near the band, far beside it, and one that only
+    comes back into it off a wall, the clearances agree to the bit, and the near walkers do matter."""
+    from husky_course.planners.base import EpisodeStart
+    from husky_course.sim.primitives import make_library
+    from husky_course.sim.world import sample_times
+
+    planner, disc_map = _walking_map()
+    library = make_library(planner.config.primitives)
+    planner.reset(EpisodeStart(library=library, max_primitives=planner.config.max_primitives, key=0))
+    rng = np.random.default_rng(3)
+    near = np.c_[rng.uniform(2.0, 4.0, 6), rng.uniform(-2.0, 2.0, 6), rng.uniform(0.2, 0.4, 6)]
+    far = np.c_[rng.uniform(2.0, 4.0, 4), rng.choice((-1, 1), 4) * rng.uniform(6.0, 8.0, 4), np.full(4, 0.3)]
+    back = np.array([[3.0, 3.4, 0.3]])  # walking left into the face at 3.9: back among the states later
+    disc_map.discs = np.r_[near, far, back]
+    disc_map.speeds = np.r_[rng.choice((-1, 1), 6) * rng.uniform(0.2, 0.6, 6), [0.3, -0.3, 0.5, -0.5], [0.6]]
+    disc_map.fresh = np.zeros(len(disc_map.discs), bool)
+    disc_map.faces = (3.9 - 10.0, 3.9)
+    x0, y0, t0 = 2.0, np.linspace(-1.0, 1.0, 7), 1.0
+    hit, clear = planner._start_check()(x0, y0, t0)
+
+    local = library.local_paths
+    every = max(1, (local.shape[1] - 1) // (planner.path_samples - 1))
+    x, ly, t = local[:, ::every, 0], local[:, ::every, 1], sample_times(0.0, local.shape[1])[::every]
+    reach = planner._reach
+    gap = np.full((len(y0), len(x)), reach)
+    for px, py, r, v in np.c_[disc_map.discs, disc_map.speeds]:
+        if not x0 + x.min() - reach < px < x0 + x.max() + reach:
+            continue
+        walk = bounced(py, v, t0 + t, r, disc_map.faces)
+        d = np.hypot(x0 + x - px, y0[:, None, None] + ly[None] - walk) - r
+        gap = np.minimum(gap, d.min(-1))
+    expected = gap - planner.radius - planner.margin
+    np.testing.assert_array_equal(clear, expected)
+    np.testing.assert_array_equal(hit, expected < 0)
+    assert (clear < reach - planner.radius - planner.margin - 0.1).any()  # the walkers near do count

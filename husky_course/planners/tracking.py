@@ -104,8 +104,14 @@ class TrackingPlanner(MappingPlanner):
             moving, doubted = near(np.c_[movers, speeds], x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
+            if len(moving):  # the lateral band the samples sweep: a walker that stays more than a reach
+                low, high = (Y.min(), Y.max()) if Y.size else (np.inf, -np.inf)  # and its radius beside
+                # it lowers no gap (capped at reach), and is skipped: the same numbers, bit for bit
             for px, py, r, v in moving:  # where it is at each sample's time (bouncing off known walls)
-                np.minimum(gap, (np.hypot(X - px, Y - bounced(py, v, T, r, faces)) - r).min(-1), out=gap)
+                wy = bounced(py, v, T, r, faces)
+                if wy.min() - high > r + reach + 1e-6 or low - wy.max() > r + reach + 1e-6:
+                    continue
+                np.minimum(gap, (np.hypot(X - px, Y - wy) - r).min(-1), out=gap)
             clear = gap - self.radius
             if not len(doubted):
                 return clear < self.margin, clear - self.margin
