@@ -140,10 +140,11 @@ def test_the_trackers_walking_points_bounce_off_the_faces_of_its_wall_points() -
 
 
 def test_the_space_time_check_counts_every_walker_within_reach_and_skips_only_the_rest() -> None:
-    """The check skips a walker whose walk stays further than a reach and its radius beside every
-    sample of the states it judges (it could not lower a gap capped at the reach). Against a brute
-    force over every walker and sample, with walkers near the band, far beside it, and one that only
-    comes back into it off a wall, the clearances agree to the bit, and the near walkers do matter."""
+    """For each state it judges, the check skips a walker whose walk stays further than a reach and its
+    radius beside every sample of that state's edges (it could not lower a gap capped at the reach).
+    Against a brute force over every walker and sample, with walkers near the states, far beside them,
+    and one that only comes back among them off a wall, the clearances agree to the bit, and the near
+    walkers do matter."""
     from husky_course.planners.base import EpisodeStart
     from husky_course.sim.primitives import make_library
     from husky_course.sim.world import sample_times

@@ -104,14 +104,16 @@ class TrackingPlanner(MappingPlanner):
             moving, doubted = near(np.c_[movers, speeds], x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
-            if len(moving):  # the lateral band the samples sweep: a walker that stays more than a reach
-                low, high = (Y.min(), Y.max()) if Y.size else (np.inf, -np.inf)  # and its radius beside
-                # it lowers no gap (capped at reach), and is skipped: the same numbers, bit for bit
-            for px, py, r, v in moving:  # where it is at each sample's time (bouncing off known walls)
-                wy = bounced(py, v, T, r, faces)
-                if wy.min() - high > r + reach + 1e-6 or low - wy.max() > r + reach + 1e-6:
-                    continue
-                np.minimum(gap, (np.hypot(X - px, Y - wy) - r).min(-1), out=gap)
+            if len(moving) and len(y0):  # the lateral band each state's samples sweep: a walker that
+                low, high = Y.min(axis=(1, 2)), Y.max(axis=(1, 2))  # stays more than a reach and its
+                # radius beside it lowers no gap (capped at reach), so that state skips it (bit for bit)
+            for px, py, r, v in moving if len(y0) else ():  # where it is at each sample's time (bouncing
+                wy = bounced(py, v, T, r, faces)  # off the walls it knows)
+                rows = (wy.min() - high <= r + reach + 1e-6) & (low - wy.max() <= r + reach + 1e-6)
+                if rows.all():
+                    np.minimum(gap, (np.hypot(X - px, Y - wy) - r).min(-1), out=gap)
+                elif rows.any():
+                    gap[rows] = np.minimum(gap[rows], (np.hypot(X - px, Y[rows] - wy) - r).min(-1))
             clear = gap - self.radius
             if not len(doubted):
                 return clear < self.margin, clear - self.margin
