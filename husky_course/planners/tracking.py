@@ -88,7 +88,7 @@ class TrackingPlanner(MappingPlanner):
         points, reach = self.points, self._reach
         standing = points[~walking]
         table = self._table_for(standing)
-        movers, speeds = points[walking], speeds[walking]
+        movers = np.column_stack([points[walking], speeds[walking]])  # rows (x, y, r, v)
         doubt = points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
         local = self._library.local_paths  # type: ignore[union-attr]
         every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
@@ -101,7 +101,7 @@ class TrackingPlanner(MappingPlanner):
 
         def check(x0: float, y0: np.ndarray, t0: float) -> tuple[np.ndarray, np.ndarray]:
             gap = table.clearance(standing, x0, y0, reach)  # (states, n), capped at reach
-            moving, doubted = near(np.c_[movers, speeds], x0), near(doubt, x0)
+            moving, doubted = near(movers, x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
             if len(moving) and len(y0):  # the lateral band each state's samples sweep: a walker that
