@@ -90,7 +90,9 @@ class TrackingConfig:
     #: (which also tightens the gate), 0.803 / 0.803 (10 / 12, 17 / 19); a track whose line fits badly read
     #: off its last two looks (walkers that bounced off a wall within 3 steps are off by over 0.1 m per step
     #: 46.5% of the time, against 8.1%, but are 7% of tracked walkers within 4 m), at two thresholds 0.807 /
-    #: 0.805 (4 / 2, 6 / 6)
+    #: 0.805 (4 / 2, 6 / 6). With the disc planner's draws (``ArrivalsConfig.samples``; 0.828 on worlds
+    #: 0-999): ``looks`` 6, 0.826 (0 / 2: a cylinder is rarely seen more than four times); ``error_scale``
+    #: 0.25, 0.826 (7 / 9)
     disc_centres: bool = True
 
 
