@@ -104,11 +104,11 @@ class TrackingPlanner(MappingPlanner):
             moving, doubted = near(movers, x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
-            if len(moving) and len(y0):  # the lateral band each state's samples sweep: a walker that
-                low, high = Y.min(axis=(1, 2)), Y.max(axis=(1, 2))  # stays more than a reach and its
-                # radius beside it lowers no gap (capped at reach), so that state skips it (bit for bit)
-            for px, py, r, v in moving if len(y0) else ():  # where it is at each sample's time (bouncing
-                wy = bounced(py, v, T, r, faces)  # off the walls it knows)
+            if len(moving):  # the lateral band each state's samples sweep: a walker that stays more
+                low, high = Y.min(axis=(1, 2)), Y.max(axis=(1, 2))  # than a reach and its radius beside
+                # it lowers no gap (capped at reach), so that state skips it (the same numbers, bit for bit)
+            for px, py, r, v in moving:  # where it is at each sample's time (bouncing off known walls)
+                wy = bounced(py, v, T, r, faces)
                 rows = (wy.min() - high <= r + reach + 1e-6) & (low - wy.max() <= r + reach + 1e-6)
                 if rows.all():
                     np.minimum(gap, (np.hypot(X - px, Y - wy) - r).min(-1), out=gap)
