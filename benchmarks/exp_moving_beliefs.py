@@ -43,7 +43,7 @@ import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.planners.base import episode_start
+from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
@@ -73,13 +73,10 @@ def chunk(args: tuple[Profile, list[int]]) -> dict[str, list]:
     last = recording(planner)
     rows: dict[str, list] = defaultdict(list)
     for seed in seeds:
-        world = sim.load(seed)
-        pose = world.start.copy()
-        planner.reset(episode_start(planner, sim, seed, pose, limit))
-        obs = sim.depth(pose[None], 0.0)[0]
-        for step in range(limit):
-            action = planner.act(obs, pose)
-            m = planner.map
+        rollout = Rollout(planner, sim, seed, limit)
+        world = rollout.world
+        for d in rollout:
+            step, pose, m = d.step, d.pose, planner.map
             cyl, vy = truth_in_frame(world, pose, float(step))
             turned = np.zeros(len(cyl), bool)
             for back in (1, 2, 3):  # its lateral velocity changed sign: it turned at a wall
@@ -101,12 +98,6 @@ def chunk(args: tuple[Profile, list[int]]) -> dict[str, list]:
                 elif not m.fresh[i]:
                     rows["tracked"].append((walker, abs(m.speeds[i] - vy[j]), m.speeds[i] == 0, j in shown,
                                             bool(turned[j])))
-            result = sim.apply(pose, action, step)
-            planner.observe(action, None)
-            if result.collided:
-                break
-            pose = result.pose
-            obs = sim.depth(pose[None], step + 1)[0]
     return rows
 
 

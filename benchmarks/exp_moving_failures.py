@@ -43,7 +43,8 @@ import numpy as np
 
 from husky_course.config import CameraConfig, OracleConfig, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.planners.base import Planner, episode_start
+from husky_course.evaluation.rollout import Rollout
+from husky_course.planners.base import Planner
 from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.reference import ON_CYLINDER, TOLD_RULES, truth_in_frame
 from husky_course.planners.registry import make_planner
@@ -154,49 +155,42 @@ def main() -> None:
     held: Counter[str] = Counter()  # the disc planner's: what its map held of the cylinder it hit
     successes = 0
     for seed in eval_world_seeds(args.worlds, 1):
-        world = sim.load(int(seed))
-        pose = world.start.copy()
-        planner.reset(episode_start(planner, sim, int(seed), pose, limit))
+        rollout = Rollout(planner, sim, int(seed), limit)
+        world = rollout.world
         first: dict[int, int] = {}
         known: list[tuple[np.ndarray, list]] = []  # per step: the pose, the planner's tracks
         log: list = []  # the disc planner's map, per step (map_knew)
-        obs = sim.depth(pose[None])[0]
-        for step in range(limit):
-            for j in sim.visible_obstacles(pose, float(step)).tolist():
-                first.setdefault(j, step)
-            action = planner.act(obs, pose.copy() if planner.privileged else None)
+        for d in rollout:
+            for j in sim.visible_obstacles(d.pose, float(d.step)).tolist():
+                first.setdefault(j, d.step)
             if disc_map:
                 m = planner.map  # type: ignore[attr-defined]
-                log.append((pose.copy(), m.discs.copy(), m.speeds.copy(), m.fresh.copy(),
+                log.append((d.pose.copy(), m.discs.copy(), m.speeds.copy(), m.fresh.copy(),
                             m.walls.points.copy(), drops[-1]))
             tracks = planner.map.motion.tracks  # type: ignore[attr-defined]
             lines = [(tracks.line(t), float(np.average(t[:, 1], weights=t[:, 3] ** -2.0)), len(t))
                      for t in tracks.tracks]
-            known.append((pose.copy(), lines))
-            result = sim.apply(pose, action, step)
-            planner.observe(action, None)
-            if result.collided:
-                if not crossable(sim, world, world.start.copy(), 0, limit):
-                    failures["the oracle finds no way through"] += 1
-                    break
-                end, f = result.path[-1], len(result.path) / sim.library.local_paths.shape[1]
-                at = world.obstacles_at(step + f)
-                gaps = np.hypot(at[:, 0] - end[0], at[:, 1] - end[1]) - at[:, 2]
-                j = int(np.argmin(gaps))
-                if world.wall_y - abs(end[1]) < gaps[j]:
-                    failures["a side wall"] += 1
-                    break
-                fatal = max(s for s in range(step + 1) if crossable(sim, world, known[s][0], s, limit - s))
-                failures[kind(world, j, fatal, known[fatal][0], first.get(j), known[fatal][1])] += 1
-                if disc_map:
-                    seen = first.get(j) is not None and first[j] <= fatal
-                    walker = "walking" if world.speeds[j] != 0 else "standing"
-                    held[f"{walker}: " + (map_knew(log, j, fatal, world) if seen else "unseen")] += 1
-                break
-            pose = result.pose
-            obs = sim.depth(pose[None], step + 1)[0]
-        else:
+            known.append((d.pose.copy(), lines))
+        step, result = d.step, d.result
+        if not result.collided:
             successes += 1
+            continue
+        if not crossable(sim, world, world.start.copy(), 0, limit):
+            failures["the oracle finds no way through"] += 1
+            continue
+        end, f = result.path[-1], len(result.path) / sim.library.local_paths.shape[1]
+        at = world.obstacles_at(step + f)
+        gaps = np.hypot(at[:, 0] - end[0], at[:, 1] - end[1]) - at[:, 2]
+        j = int(np.argmin(gaps))
+        if world.wall_y - abs(end[1]) < gaps[j]:
+            failures["a side wall"] += 1
+            continue
+        fatal = max(s for s in range(step + 1) if crossable(sim, world, known[s][0], s, limit - s))
+        failures[kind(world, j, fatal, known[fatal][0], first.get(j), known[fatal][1])] += 1
+        if disc_map:
+            seen = first.get(j) is not None and first[j] <= fatal
+            walker = "walking" if world.speeds[j] != 0 else "standing"
+            held[f"{walker}: " + (map_knew(log, j, fatal, world) if seen else "unseen")] += 1
     print(f"{planner.name} on {args.worlds} moving tuning worlds: success {successes / args.worlds:.3f}")
     print("failures by what it knew, at the fatal decision, of the cylinder it hit:")
     for name, count in failures.most_common():

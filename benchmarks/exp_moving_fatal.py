@@ -51,7 +51,7 @@ from exp_moving_failures import crossable
 
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds
-from husky_course.planners.base import episode_start
+from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
@@ -126,24 +126,15 @@ def chunk(args: tuple[Profile, list[int]]) -> list[dict]:
     planner = make_planner("discs", config=profile.sim, profile=profile)
     found = []
     for seed in seeds:
-        world = sim.load(seed)
-        pose = world.start.copy()
-        planner.reset(episode_start(planner, sim, seed, pose, limit))
-        obs = sim.depth(pose[None], 0.0)[0]
+        rollout = Rollout(planner, sim, seed, limit)
+        world = rollout.world
         seen = np.zeros(0, int)  # the cylinders some image so far has rendered
-        for step in range(limit):
-            seen = np.union1d(seen, sim.visible_obstacles(pose, float(step)))
-            action = planner.act(obs, pose)
-            winnable = crossable(sim, world, pose, step, limit - step)
-            if winnable and not survives(sim, world, pose, action, step, limit):
-                found.append(replay(planner, sim, world, pose, step, limit, seen))
+        for d in rollout:
+            seen = np.union1d(seen, sim.visible_obstacles(d.pose, float(d.step)))
+            winnable = crossable(sim, world, d.pose, d.step, limit - d.step)
+            if winnable and not survives(sim, world, d.pose, d.action, d.step, limit):
+                found.append(replay(planner, sim, world, d.pose, d.step, limit, seen))
                 break
-            result = sim.apply(pose, action, step)
-            planner.observe(action, None)
-            if result.collided:
-                break
-            pose = result.pose
-            obs = sim.depth(pose[None], step + 1)[0]
     return found
 
 

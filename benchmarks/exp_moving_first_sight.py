@@ -47,8 +47,8 @@ from husky_course.config import get_profile, with_world
 from husky_course.data.collect import world_seed_for
 from husky_course.engines import map_tasks
 from husky_course.evaluation.episodes import evaluate
+from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.arrivals import Arrivals
-from husky_course.planners.base import episode_start
 from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
@@ -122,14 +122,11 @@ def examples(task: tuple[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     planner.map = FirstSightMap(planner.map)  # type: ignore[attr-defined]
     xs, ys, ws = [], [], []
     for seed in seeds:
-        world = sim.load(int(seed))
-        pose = world.start.copy()
-        planner.reset(episode_start(planner, sim, int(seed), pose, limit))
-        obs = sim.depth(pose[None])[0]
-        for step in range(limit):
-            action = planner.act(obs)
-            (px, py, _), c, s = pose, np.cos(pose[2]), np.sin(pose[2])
-            now, later = world.obstacles_at(float(step)), world.obstacles_at(step + 1.0)
+        rollout = Rollout(planner, sim, int(seed), limit)
+        world = rollout.world
+        for d in rollout:
+            (px, py, _), c, s = d.pose, np.cos(d.pose[2]), np.sin(d.pose[2])
+            now, later = world.obstacles_at(float(d.step)), world.obstacles_at(d.step + 1.0)
             rx, ry = c * (now[:, 0] - px) + s * (now[:, 1] - py), -s * (now[:, 0] - px) + c * (now[:, 1] - py)
             vy = -s * (later[:, 0] - now[:, 0]) + c * (later[:, 1] - now[:, 1])
             for discs, features in planner.map.recorded:  # type: ignore[attr-defined]
@@ -139,12 +136,6 @@ def examples(task: tuple[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
                 xs.append(features[on])
                 ys.append(np.where(vy[j] == 0, 0, np.where(vy[j] > 0, 1, 2))[on])
                 ws.append(np.full(int(on.sum()), seed))
-            result = sim.apply(pose, action, step)
-            planner.observe(action, None)
-            if result.collided:
-                break
-            pose = result.pose
-            obs = sim.depth(pose[None], step + 1)[0]
     return np.concatenate(xs), np.concatenate(ys), np.concatenate(ws)
 
 

@@ -41,8 +41,9 @@ from exp_moving_failures import crossable  # benchmarks/, the script's own folde
 from husky_course.config import get_profile, with_world
 from husky_course.course.diagnosis import sign_test
 from husky_course.evaluation.episodes import eval_world_seeds
+from husky_course.evaluation.rollout import Rollout
 from husky_course.evaluation.statistics import clopper_pearson
-from husky_course.planners.base import Planner, episode_start
+from husky_course.planners.base import Planner
 from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
@@ -50,25 +51,16 @@ from husky_course.sim.fast import FastSimulator
 def run(planner: Planner, sim: FastSimulator, seed: int, looks: int, limit: int) -> tuple[bool, int | None]:
     """One episode with ``looks`` standing images before the start: ``(success, fatal step)``, the
     fatal step (the last from which the true world had a way through) only for a failure."""
-    world = sim.load(seed)
-    pose = world.start.copy()
-    planner.reset(episode_start(planner, sim, seed, pose, limit))
+    rollout = Rollout(planner, sim, seed, limit)
+    world, pose = rollout.world, rollout.start
     for k in range(looks, 0, -1):  # the robot stands; the cylinders walk
         planner.map.add(sim.depth(pose[None], -float(k))[0])  # type: ignore[attr-defined]
         planner.map.move(0.0, 0.0)  # type: ignore[attr-defined]
-    poses = []
-    obs = sim.depth(pose[None], 0.0)[0]
-    for step in range(limit):
-        poses.append(pose.copy())
-        action = planner.act(obs, pose)
-        result = sim.apply(pose, action, step)
-        planner.observe(action, None)
-        if result.collided:
-            ok = [s for s in range(step + 1) if crossable(sim, world, poses[s], s, limit - s)]
-            return False, (max(ok) if ok else None)
-        pose = result.pose
-        obs = sim.depth(pose[None], step + 1)[0]
-    return True, None
+    made = list(rollout)
+    if not made[-1].result.collided:  # type: ignore[union-attr]
+        return True, None
+    ok = [d.step for d in made if crossable(sim, world, d.pose, d.step, limit - d.step)]
+    return False, (max(ok) if ok else None)
 
 
 def paired_line(label: str, won: np.ndarray, base: np.ndarray | None) -> str:

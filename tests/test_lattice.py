@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from husky_course.data.labels import best_continuations
-from husky_course.evaluation.episodes import episode_start
+from husky_course.planners.base import episode_start
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.sim.fast import FastSimulator
 from husky_course.sim.lattice import LatticeError, expand, survival

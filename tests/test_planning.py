@@ -16,14 +16,20 @@ from husky_course.data.collect import VIDEO_STRIDE, collect, world_seed_for
 from husky_course.evaluation.episodes import (
     EVAL_SET_MAX,
     EVAL_SET_STRIDE,
-    episode_start,
     eval_world_seeds,
     evaluate,
     is_eval_seed,
     run_episode,
 )
+from husky_course.evaluation.rollout import Rollout
 from husky_course.evaluation.statistics import clopper_pearson
-from husky_course.planners.base import Planner, PlannerError, check_look_ahead, check_observation
+from husky_course.planners.base import (
+    Planner,
+    PlannerError,
+    check_look_ahead,
+    check_observation,
+    episode_start,
+)
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.planners.registry import PLANNERS, make_planner
 from husky_course.sim.backends import make_simulator
@@ -180,6 +186,29 @@ def test_run_episode_accounting(sim):
     assert len(ep.decision_times) == ep.n_prims
     oracle_ep = run_episode(OraclePlanner(), sim, int(eval_world_seeds(1)[0]), max_primitives=3)
     assert oracle_ep.success and oracle_ep.n_prims == 3 and not oracle_ep.collided
+
+
+def test_a_rollout_stops_at_each_decision_before_it_is_played_and_plays_run_episodes_episode(sim):
+    seed = int(eval_world_seeds(1)[0])
+    planner = Recorder()
+    rollout = Rollout(planner, sim, seed)
+    assert planner.calls == [("reset",)]  # made: reset, nothing chosen yet
+    seen = []
+    for d in rollout:
+        assert d.result is None and planner.calls[-1] == ("act",)  # chosen, not yet played or observed
+        seen.append(d)
+    assert [d.step for d in seen] == list(range(len(seen)))
+    assert all(d.result is not None for d in seen) and seen[-1].result.collided
+    assert all(np.array_equal(a.result.pose, b.pose) for a, b in zip(seen, seen[1:], strict=False))
+    ep = run_episode(Recorder(), sim, seed)  # each starts where the last ended; run_episode plays the same
+    assert ep.actions == [d.action for d in seen] and np.array_equal(ep.poses[-1], seen[-1].result.pose)
+    with pytest.raises(RuntimeError, match="once"):
+        next(iter(rollout))
+    stopped = Recorder()
+    for d in Rollout(stopped, sim, seed):
+        if d.step == 1:
+            break
+    assert [c[0] for c in stopped.calls] == ["reset", "act", "observe", "act"]  # the second never played
 
 
 def test_random_planner_is_reproducible(sim):

@@ -9,7 +9,6 @@ Evaluation set ``s`` of size ``n`` is the worlds ``EVAL_SEED_BASE + s * 1_000_00
 from __future__ import annotations
 
 import contextlib
-import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -18,10 +17,11 @@ import numpy as np
 from ..checks import check_int, is_int
 from ..config import EVAL_SEED_BASE, SimConfig
 from ..engines import ENGINE, map_tasks, resolve_engine
-from ..planners.base import Planner, episode_start
+from ..planners.base import Planner
 from ..sim.backends import check_backend, make_simulator
 from ..sim.base import Simulator
 from ..sim.fast import FastSimulator
+from .rollout import Rollout
 from .statistics import clopper_pearson
 
 EVAL_SET_STRIDE = 1_000_000
@@ -92,49 +92,21 @@ def run_episode(
     With ``record`` the episode also keeps every observation and the planner's ``last_scores``
     (for step-by-step figures and widgets).
     """
-    max_primitives = check_int(max_primitives, "max_primitives", 1, 10**6)
-    world = sim.load(int(world_seed))
-    pose = world.start.copy()
-    t0 = time.perf_counter()
-    privileged = planner.privileged  # only these see the simulator and the true pose
-    planner.reset(episode_start(planner, sim, int(world_seed), pose, max_primitives))
-    reset_time = time.perf_counter() - t0
-    obs = sim.depth(pose[None])[0]
-    actions: list[int] = []
-    poses, paths, times = [pose], [pose[None]], []
-    collided = False
-    observations: list[np.ndarray] = []
-    scores: list[np.ndarray | None] = []
-    for step in range(max_primitives):
-        t0 = time.perf_counter()
-        action = planner.act(obs, pose.copy() if privileged else None)
-        times.append(time.perf_counter() - t0)
-        if record:
-            observations.append(obs)
-            scores.append(None if planner.last_scores is None else np.array(planner.last_scores))
-        action = sim.library.check_index(action)
-        result = sim.apply(pose, action, step)
-        actions.append(action)
-        paths.append(result.path)
-        pose = result.pose
-        poses.append(pose)
-        collided = result.collided
-        obs = None if collided else sim.depth(pose[None], step + 1)[0]
-        planner.observe(action, obs)
-        if collided:
-            break
+    rollout = Rollout(planner, sim, world_seed, max_primitives)
+    made = list(rollout)  # every decision, each with the primitive it played back
+    results = [d.result for d in made if d.result is not None]
     return Episode(
         world_seed=int(world_seed),
-        actions=actions,
-        poses=np.asarray(poses),
-        path=np.concatenate(paths),
-        collided=collided,
-        n_prims=len(actions),
-        success=not collided and len(actions) == max_primitives,
-        decision_times=times,
-        reset_time=reset_time,
-        observations=observations,
-        scores=scores,
+        actions=[d.action for d in made],
+        poses=np.asarray([rollout.start, *(r.pose for r in results)]),
+        path=np.concatenate([rollout.start[None], *(r.path for r in results)]),
+        collided=bool(results[-1].collided),
+        n_prims=len(made),
+        success=not results[-1].collided and len(made) == rollout.max_primitives,
+        decision_times=[d.seconds for d in made],
+        reset_time=rollout.reset_seconds,
+        observations=[d.obs for d in made] if record else [],
+        scores=[d.scores for d in made] if record else [],
     )
 
 
