@@ -183,7 +183,18 @@ class ArrivalsConfig:
     #: 6 / 4, 0.831 / 0.823 (6 / 3, 17 / 22); no unexplained points (``DiscConfig.unexplained`` inf), 0.813
     #: (19 / 34). Along its runs the undecided first sights are believed to walk as often as they do
     #: (``benchmarks/exp_moving_beliefs.py``: 0.400 against 0.394 at the first decision, 0.390 against
-    #: 0.398 later, 300 worlds)
+    #: 0.398 later, 300 worlds). Scoring, against this code on worlds 0-999 (0.828): each first primitive
+    #: by one plan per lattice state for all the draws (not each draw's own best: non-clairvoyant), 0.825
+    #: (38 / 41); the mean of the two, 0.834 (29 / 23), but 0.816 on worlds 1,000-1,999 (35 / 45 against
+    #: 0.826); ties of the mean broken by the draws' mean clearance bins before the map's own, 0.822
+    #: (44 / 50). Ties: at 222 of 558 decisions (60 worlds) several first primitives tie exactly, mostly
+    #: plans that make the same lateral move now or later (the lateral cost adds up the moves); the search
+    #: takes the lowest index, so it moves early to one side and late to the other. Its exact mirror
+    #: crossed 0.810 (63 / 81): differences of about 2 points on 1,000 worlds are noise for rules that
+    #: change this many decisions. Within that, none did better: every move as early / as late as it can,
+    #: 0.817 / 0.802; toward the middle between the faces read, at every level / the first only, 0.820 /
+    #: 0.821; the previous decision's plan continued among equals, 0.814; with means within 1/16 counted
+    #: equal, 0.811
     samples: int = 32
     #: m per step: in each of ``samples``' draws, every walker the tracks follow walks at its track's
     #: speed plus a normal error of this spread (0: only the first sights are drawn). Along the disc
