@@ -79,6 +79,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"fixed by every disc's velocity told: \d+[\s\S]*the disc whose place and velocity alone fixes it"
         r"[\s\S]*the lost cylinder whose return alone fixes it",
     ),
+    "exp_moving_paired.py": (  # the driver's own shadow must agree with it at every decision
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--variants", "samples=0", "--check"],
+        rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"
+        r"[\s\S]*samples=0 +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
+    ),
     "exp_moving_first_decision.py": (
         ["--profile", "quick", "--worlds", "2", "--draws", "1", "--workers", "1"],
         r"2 moving tuning worlds, \d with a way through at the start, 1 draws each[\s\S]*"
