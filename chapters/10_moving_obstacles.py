@@ -222,6 +222,11 @@ display(Markdown(
 # set are in `ArrivalsConfig`. Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py`
 # measures along the planner's own runs, each belief beside the truth (privileged, an analysis tool).
 # The tracker plans on its map's single guess.
+# Telling such rules apart takes care: a rule that changes many of the planner's choices moves its
+# success on 1,000 worlds by a couple of points either way at random (the search's own tie-break,
+# mirrored, does). `benchmarks/exp_moving_paired.py` therefore also judges a rule decision by
+# decision, from the *same* states: the planner as it is drives, the variant runs beside it on the
+# same images, and each choice is judged in the true world (does a way through remain after it?).
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every
