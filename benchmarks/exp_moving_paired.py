@@ -103,7 +103,9 @@ def parse_variant(text: str) -> dict:
 
 def variant_planner(profile: Profile, variant: str):
     """The disc planner with ``variant``'s settings (an experiment may put its own rules here: the
-    workers are forked, so a replacement made before :func:`main` runs reaches them)."""
+    workers are forked, so a replacement made before :func:`main` runs reaches them; a privileged
+    shadow, such as :class:`~husky_course.planners.reference.ToldDiscsPlanner`, is handed the
+    simulator at the start and the true pose at every decision, as ``run_episode`` hands them)."""
     return make_planner("discs", config=profile.sim, profile=profile, **parse_variant(variant))
 
 
@@ -131,7 +133,7 @@ def chunk(args: tuple[Profile, list[int], list[str]]) -> list[dict]:
             for s in shadows:
                 if last is not None:
                     s.observe(last, d.obs)
-            choices = [s.act(d.obs) for s in shadows]
+            choices = [s.act(d.obs, d.pose.copy() if s.privileged else None) for s in shadows]
             last = d.action
             if d.step == 0 and not crossable(sim, rollout.world, d.pose, 0, limit):
                 break  # no way through this world at all (later states are winnable: the driver's choice
