@@ -66,13 +66,13 @@ the columns of the last five images instead of three, 152 (1 / 0); 16 draws, 157
 makes fewer.
 
 A privileged shadow prices knowledge the same way: the disc planner told the truth by
-:class:`~husky_course.planners.reference.ToldDiscsPlanner` (worlds 0-999, the same 8,879 decisions and 151
-fatal choices of the driver, pooled from runs of 300 and 700 worlds): told its first sights' true
+:class:`~husky_course.planners.reference.ToldDiscsPlanner` (worlds 0-999, the same 8,879 decisions and
+151 fatal choices of the driver, pooled from runs of 300 and 700 worlds): told its first sights' true
 motion, 122 fatal choices (23 / 52, p = 0.001); every disc's, 107 (33 / 77); every cylinder an image has
 rendered so far, exactly, with its motion, 55 (14 / 110). Two thirds of the fatal choices go when the map
-holds the seen cylinders where they are; motion alone, a third of that. What the map remembers of what
-it has seen (discs off their cylinders, lost cylinders) is where the next gain lies, more than in
-how it reads motion or how it decides.
+holds the seen cylinders where they are; every disc's motion alone, less than half of that. What the map
+remembers of what it has seen (discs off their cylinders, lost cylinders) is where the next gain lies,
+more than in how it reads motion or how it decides.
 
 A variant is a comma-separated list of the disc planner's settings (``key=value``, values as Python
 literals: ``samples=0``, ``margin=0.05``, ``horizon=6``, ``speed_sigma=0.0``).
