@@ -1,0 +1,196 @@
+"""Experiment: what the moving disc planner's memory of seen cylinders costs, priced from the same states.
+
+Run: ``python benchmarks/exp_moving_memory.py [--profile full] [--worlds 1000] [--start 0] [--workers 2]
+[--rules l S N L ml mdl mndl] [--check] [--save F.npz]`` (the disc planner needs its network:
+``python -m husky_course train discs``).
+
+``exp_moving_paired.py`` judges variants of the disc planner as shadows of the planner as it is, at
+the same states. Told every cylinder an image has rendered so far, exactly, a shadow made 55 fatal
+choices where the planner made 151 (worlds 0-999 of the tuning set, full profile); told every disc's
+true motion, 107. Here the difference is split by what the map does with what it has seen. Each
+shadow is the disc planner whose map is told the truth (privileged, an analysis tool) as its *rule*
+says, a string of letters:
+
+* ``m``: every disc's true lateral velocity (the ``told-discs`` reference's second rule; its tracked
+  walkers' speeds are not drawn);
+* ``n``: the discs the current image makes, each put on the cylinder it belongs to, exactly;
+* ``d``: the remembered discs (made by earlier images), each put back on its cylinder;
+* ``l``: every cylinder an image has rendered that no disc belongs to (and not further behind than the
+  map forgets), added exactly with its true velocity; or only those lost one way: ``S`` the disc the
+  map held on it was dropped because the column through its centre saw it again or through it, ``L``
+  a new disc landed on it, ``B`` it fell behind the map's memory, ``N`` no disc ever belonged to it
+  (its pieces read as a wall, or as a neighbour's);
+* ``f``: discs on no cylinder dropped.
+
+A disc *belongs* to the cylinder whose surface lies nearest its centre (within ``ON_CYLINDER``) when
+the image that made it was taken, and keeps that identity as the map carries it: the truth is read
+once, at the disc's birth, not again when it drifts. The empty rule tells nothing: that shadow must
+agree with the driver at every decision (``--check``).
+
+Measured (full profile, worlds 0-999 of the tuning set, 8,879 winnable decisions, 151 fatal choices of
+the driver; ``only rule`` / ``only driver``: the decisions where only that one's choice was fatal):
+
+======================================================  =====  =========  ===========  =======
+rule                                                    fatal  only rule  only driver  p
+======================================================  =====  =========  ===========  =======
+``l``: every lost cylinder given back                     120          5           36  < 0.001
+``S``: ... only those dropped at their centre column      139          2           14    0.004
+``N``: ... only those no disc ever belonged to            145          6           12    0.238
+``L``: ... only those a new disc landed on                149          0            2    0.500
+``m``: every disc's motion (identity speeds)              106         32           77  < 0.001
+``md``: and the remembered discs on their cylinders       103         30           78  < 0.001
+``mn``: and this image's discs on theirs                   99         32           84  < 0.001
+``mf``: and discs on no cylinder dropped                  106         32           77  < 0.001
+``ml``: and every lost cylinder given back                 69         19          101  < 0.001
+``mS`` / ``mN`` / ``mL`` / ``mB``                    83 / 101 / 104 / 106
+``mdl``                                                    65         17          103  < 0.001
+``mndlf`` (the told reference's third rule, rebuilt)       55         14          110  < 0.001
+======================================================  =====  =========  ===========  =======
+
+Of the 51 fatal choices that exact seen cylinders remove beyond every disc's motion (106 to 55), the
+lost cylinders account for 37 (106 to 69); the remembered discs' drift off their cylinders for 3
+(106 to 103), this image's discs' own errors for 7. Without any motion told, the lost cylinders given
+back remove 31 of 151. Of the lost, those dropped at their centre column are the largest single kind
+(12 without motion, 23 with); replayed, they are mostly cylinders standing beside or partly behind a
+nearer one: the column through the remembered disc's centre reaches its front (or an occluder within
+5 cm of it), the disc is dropped to be replaced, and the new image's piece joins the two cylinders, so
+its one disc covers only one of them. A rule that kept such a disc unless a new disc landed on it was
+tried through ``exp_moving_paired.py``'s ``variant_planner``: see ``ArrivalsConfig.samples``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import exp_moving_paired as paired
+import numpy as np
+
+from husky_course.config import Profile
+from husky_course.planners.base import EpisodeStart
+from husky_course.planners.moving_discs import DiscTrackingPlanner, WalkingDiscMap
+from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
+from husky_course.sim.fast import FastSimulator
+
+LETTERS = "mndlSLNBf"  #: the rules' letters (module docstring)
+LOST_WAYS = "SLNB"  #: how a cylinder was lost: ``l`` gives back every one, these only their kind
+
+
+class RememberingMap(WalkingDiscMap):
+    """A walking disc map that knows which cylinder each disc belongs to, and how each seen cylinder
+    it no longer holds was lost; told the truth as ``rule`` says (module docstring). Privileged."""
+
+    rule: str
+    eyes: FastSimulator
+    pose: np.ndarray
+    time: float
+    seen: np.ndarray  #: the cylinders any image so far (this one included) has rendered
+    ids: np.ndarray  #: per disc: the cylinder it belongs to (-1: none)
+    lost: dict  #: cylinder -> how its last disc was dropped (``S``, ``L`` or ``B``)
+
+    def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
+        seen, landed = self.forgotten(d, new)
+        self.lost.update({int(i): "S" for i in self.ids[seen & (self.ids >= 0)]})
+        self.lost.update({int(i): "L" for i in self.ids[landed & ~seen & (self.ids >= 0)]})
+        self.kept = super()._merge(obs, d, new, other)
+        return self.kept
+
+    def add(self, obs: np.ndarray) -> None:
+        old = self.ids
+        super().add(obs)
+        assert self.eyes.world is not None
+        cyl, vy = truth_in_frame(self.eyes.world, self.pose, self.time)
+        born = len(self.discs) - int(self.kept.sum())
+        if born:
+            gap = np.hypot(self.discs[:born, :1] - cyl[:, 0], self.discs[:born, 1:2] - cyl[:, 1]) - cyl[:, 2]
+            j = np.argmin(gap, axis=1)
+            self.ids = np.r_[np.where(gap[np.arange(born), j] < ON_CYLINDER, j, -1), old[self.kept]]
+        else:
+            self.ids = old[self.kept]
+        on, rule = self.ids >= 0, self.rule
+        if "m" in rule:
+            self.speeds = np.where(on, vy[np.maximum(self.ids, 0)], self.speeds)
+            self.doubt = np.zeros_like(self.doubt)
+        now = np.arange(len(self.ids)) < born
+        place = on & ((now & ("n" in rule)) | (~now & ("d" in rule)))
+        self.discs[place] = cyl[self.ids[place]]
+        if "f" in rule:
+            self._keep(on)
+        ways = set(rule) & set(LOST_WAYS)
+        if "l" in rule or ways:
+            gone = np.setdiff1d(self.seen, self.ids).astype(int)
+            gone = gone[cyl[gone, 0] > -self.forget_behind]
+            if ways:
+                gone = gone[[self.lost.get(int(i), "N") in ways for i in gone]].astype(int)
+            self.discs, self.speeds = np.r_[self.discs, cyl[gone]], np.r_[self.speeds, vy[gone]]
+            self.fresh, self.ids = np.r_[self.fresh, np.zeros(len(gone), bool)], np.r_[self.ids, gone]
+            self.doubt = np.r_[self.doubt, np.zeros((len(gone), self.doubt.shape[1]))]
+
+    def _keep(self, keep: np.ndarray) -> None:
+        self.discs, self.speeds, self.fresh = self.discs[keep], self.speeds[keep], self.fresh[keep]
+        self.doubt, self.ids = self.doubt[keep], self.ids[keep]
+
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        behind = (self.discs[:, 0] - dx <= -self.forget_behind) & (self.ids >= 0)
+        self.lost.update({int(i): "B" for i in self.ids[behind]})
+        kept = super().move(dx, dy)
+        self.ids = self.ids[kept]
+        return kept
+
+
+class MemoryToldPlanner(DiscTrackingPlanner):
+    """The moving disc planner whose map is a :class:`RememberingMap` told ``rule`` (privileged)."""
+
+    privileged = True
+
+    def __init__(self, profile: Profile, rule: str) -> None:
+        from husky_course.training.discs import load_discs  # the trained network (torch)
+
+        d = profile.discs
+        sigma = {"speed_sigma": 0.0} if "m" in rule else {}  # every speed told: none drawn
+        super().__init__(load_discs(profile)[0], profile.sim, grow=d.grow, unexplained=d.unexplained,
+                         margin=d.margin, **sigma)
+        self.map.__class__ = RememberingMap
+        self.map.rule = rule  # type: ignore[attr-defined]
+        self.name = f"discs, memory told {rule!r} (privileged)"
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        if start.sim is None or start.sim.world is None:
+            raise RuntimeError("MemoryToldPlanner is privileged: run it with run_episode or a Rollout")
+        m = self.map
+        m.eyes = FastSimulator(start.sim.config)  # type: ignore[attr-defined]
+        m.eyes.load(start.sim.world)  # type: ignore[attr-defined]
+        m.time, m.seen, m.ids, m.lost = 0.0, np.zeros(0, int), np.zeros(0, int), {}  # type: ignore[attr-defined]
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        m = self.map
+        m.pose = np.asarray(pose, float)  # type: ignore[attr-defined]
+        m.seen = np.union1d(m.seen, m.eyes.visible_obstacles(m.pose, m.time)).astype(int)  # type: ignore
+        return super().act(obs, pose)
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        super().observe(action, obs_next)
+        self.map.time += 1.0  # type: ignore[attr-defined]
+
+
+def check_rule(rule: str) -> str:
+    """``rule`` if it is made of :data:`LETTERS` (each at most once), else a clear error."""
+    if set(rule) - set(LETTERS) or len(set(rule)) != len(rule):
+        raise SystemExit(f"a rule is a string of distinct letters of {LETTERS!r}; got {rule!r}")
+    return rule
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run ``exp_moving_paired.py`` with :class:`MemoryToldPlanner` shadows, one per ``--rules``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rules", nargs="+", default=["l", "S", "N", "L", "ml", "mdl", "mndl"])
+    args, rest = parser.parse_known_args(argv)
+    rules = [check_rule(r.strip()) for r in args.rules]
+    paired.parse_variant = check_rule
+    paired.variant_planner = MemoryToldPlanner  # the workers are forked: they see the replacement
+    paired.main([*rest, "--variants", *rules])
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
