@@ -227,6 +227,8 @@ display(Markdown(
 # mirrored, does). `benchmarks/exp_moving_paired.py` therefore also judges a rule decision by
 # decision, from the *same* states: the planner as it is drives, the variant runs beside it on the
 # same images, and each choice is judged in the true world (does a way through remain after it?).
+# `benchmarks/exp_moving_memory.py` prices the map's memory the same way, with shadows told part of
+# the truth: the cylinders it has lost, how each was lost, and where its remembered discs really are.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every

@@ -245,6 +245,16 @@ class DiscMap:
         """``(seen, landed)`` per remembered disc: the column ``d`` through its centre sees it again or
         through it (reaches its front), and a disc of ``new`` lands on it (their centres closer than
         the larger radius); :meth:`add` drops both."""
+        # A disc dropped here is lost when the new image makes none on its cylinder: most often its
+        # piece joined a neighbour's, partly in front of it, and one disc covers one of the two
+        # (benchmarks/exp_moving_memory.py prices what lost cylinders cost on the moving course).
+        # Prototypes judged from the same states (benchmarks/exp_moving_paired.py, full profile, moving
+        # tuning worlds 0-999; 151 fatal choices of this rule; a variant's, only its own / only this
+        # rule's): a disc whose centre column reaches no more than 0.1 / 0.15 / 0.25 m past its front
+        # kept unless a new disc lands on it, 153 (3 / 1) / 153 (3 / 1) / 154 (5 / 2); kept only where
+        # that column stays a scan point, within 0.1 / 0.2 / 0.4 m, 150 / 150 / 149 (0 / 1 to 0 / 2);
+        # a cylinder's piece cut where its disc leaves 3 or more points unexplained at one end and each
+        # part read again, 147 (5 / 9, p = 0.42). None makes measurably fewer.
         cam, reader = self.reader.camera, self.reader
         x, y, r = self.discs.T
         dx = x - cam.mount_forward
