@@ -62,7 +62,8 @@ cylinder beside or partly behind a nearer one, its remembered disc dropped becau
 reached its front (or an occluder within 5 cm of it), and the new image's piece joining the two
 cylinders, so that its one disc covers one of them. Rules that keep such a disc, or cut such a piece
 again, were tried through ``exp_moving_paired.py``'s ``variant_planner``; none made measurably fewer
-fatal choices (the figures are in a comment in ``DiscMap.forgotten``).
+fatal choices; nor did finer cuts of every piece (the figures are in comments in ``DiscMap.forgotten``
+and ``PieceReader.pieces``).
 """
 
 from __future__ import annotations

@@ -71,6 +71,11 @@ class PieceReader:
     def pieces(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
         """``(d, columns, points, pieces)``: per-column depth (``inf`` unseen), the seen columns,
         their robot-frame points ``(m, 2)`` and the index arrays (into them) of each piece."""
+        # The tracker's cut. Finer cuts, judged from the same states on the moving course (full profile,
+        # tuning worlds 0-999, benchmarks/exp_moving_paired.py; 151 fatal choices with this one; a
+        # variant's, only its own / only this cut's): pieces cut at gaps of 0.15 / 0.2 m instead of 0.3,
+        # 152 (6 / 5) / 151 (3 / 3); arcs split at a prominence of 0.01 / 0.015 m instead of 0.03,
+        # 157 (9 / 3) / 157 (8 / 2). None makes fewer.
         d = self.scan.columns(obs)
         cols = np.flatnonzero(np.isfinite(d))
         pts = np.stack([self.camera.mount_forward + d[cols], d[cols] * self.scan.u[cols]], axis=1)
@@ -254,7 +259,8 @@ class DiscMap:
         # kept unless a new disc lands on it, 153 (3 / 1) / 153 (3 / 1) / 154 (5 / 2); kept only where
         # that column stays a scan point, within 0.1 / 0.2 / 0.4 m, 150 / 150 / 149 (0 / 1 to 0 / 2);
         # a cylinder's piece cut where its disc leaves 3 or more points unexplained at one end and each
-        # part read again, 147 (5 / 9, p = 0.42). None makes measurably fewer.
+        # part read again, 147 (5 / 9, p = 0.42). None makes measurably fewer (finer cuts of every
+        # piece: PieceReader.pieces).
         cam, reader = self.reader.camera, self.reader
         x, y, r = self.discs.T
         dx = x - cam.mount_forward
