@@ -76,8 +76,8 @@ import numpy as np
 
 from husky_course.config import Profile
 from husky_course.planners.base import EpisodeStart
-from husky_course.planners.moving_discs import DiscTrackingPlanner, WalkingDiscMap
-from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
+from husky_course.planners.moving_discs import WalkingDiscMap
+from husky_course.planners.reference import ON_CYLINDER, TOLD_RULES, ToldDiscsPlanner, truth_in_frame
 from husky_course.sim.fast import FastSimulator
 
 LETTERS = "mndlSLNBf"  #: the rules' letters (module docstring)
@@ -146,40 +146,21 @@ class RememberingMap(WalkingDiscMap):
         return kept
 
 
-class MemoryToldPlanner(DiscTrackingPlanner):
-    """The moving disc planner whose map is a :class:`RememberingMap` told ``rule`` (privileged)."""
-
-    privileged = True
+class MemoryToldPlanner(ToldDiscsPlanner):
+    """The moving disc planner whose map is a :class:`RememberingMap` told ``rule`` (privileged). The
+    ``told-discs`` reference's machinery: the true world at the start, the true pose at each decision,
+    the cylinders each image renders; built as its first rule (tracked walkers' speeds drawn as the
+    disc planner draws them) or, with ``m``, its second (every speed told: none drawn)."""
 
     def __init__(self, profile: Profile, rule: str) -> None:
-        from husky_course.training.discs import load_discs  # the trained network (torch)
-
-        d = profile.discs
-        sigma = {"speed_sigma": 0.0} if "m" in rule else {}  # every speed told: none drawn
-        super().__init__(load_discs(profile)[0], profile.sim, grow=d.grow, unexplained=d.unexplained,
-                         margin=d.margin, **sigma)
+        super().__init__(profile, TOLD_RULES[1] if "m" in rule else TOLD_RULES[0], profile.sim)
         self.map.__class__ = RememberingMap
         self.map.rule = rule  # type: ignore[attr-defined]
         self.name = f"discs, memory told {rule!r} (privileged)"
 
     def reset(self, start: EpisodeStart) -> None:
         super().reset(start)
-        if start.sim is None or start.sim.world is None:
-            raise RuntimeError("MemoryToldPlanner is privileged: run it with run_episode or a Rollout")
-        m = self.map
-        m.eyes = FastSimulator(start.sim.config)  # type: ignore[attr-defined]
-        m.eyes.load(start.sim.world)  # type: ignore[attr-defined]
-        m.time, m.seen, m.ids, m.lost = 0.0, np.zeros(0, int), np.zeros(0, int), {}  # type: ignore[attr-defined]
-
-    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
-        m = self.map
-        m.pose = np.asarray(pose, float)  # type: ignore[attr-defined]
-        m.seen = np.union1d(m.seen, m.eyes.visible_obstacles(m.pose, m.time)).astype(int)  # type: ignore
-        return super().act(obs, pose)
-
-    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
-        super().observe(action, obs_next)
-        self.map.time += 1.0  # type: ignore[attr-defined]
+        self.map.ids, self.map.lost = np.zeros(0, int), {}  # type: ignore[attr-defined]
 
 
 def check_rule(rule: str) -> str:
