@@ -85,9 +85,9 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*samples=0 +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
     ),
     "exp_moving_memory.py": (  # a shadow told nothing is the driver: it must agree at every decision
-        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--rules", "l", "mndlf", "--check"],
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--rules", "lj", "mndlf", "--check"],
         rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"
-        r"[\s\S]*\nl +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\nmndlf +\d+ +\d+ +\d+ +\d+  \d\.\d{3}"
+        r"[\s\S]*\nlj +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\nmndlf +\d+ +\d+ +\d+ +\d+  \d\.\d{3}"
         r"\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
     ),
     "exp_moving_first_decision.py": (
