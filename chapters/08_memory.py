@@ -179,7 +179,14 @@ display(Markdown(
 # explain, stay scan points. The mapping planner's exact search plans over that map. The network
 # is trained on pieces of random views in training worlds, labelled by the simulator with the
 # cylinder each column hit (`husky_course/imitation/discs.py`); its margin and the tolerance for
-# unexplained points were chosen on the tuning set (`DiscConfig`).
+# unexplained points were chosen on the tuning set (`DiscConfig`). A cylinder standing beside another,
+# or partly behind it, often stays joined to it in one piece, and one disc then covers only one of the
+# two: a second small network (`husky_course/planners/cuts.py`) reads every boundary between two
+# neighbouring points of a piece, with the disc network's read of the parts either side, and the piece
+# is cut again where it says two cylinders meet. It learns from the same views, labelled where the
+# columns' cylinder changes (`husky_course/imitation/cuts.py`). The disc planner uses it on the moving
+# course (chapter 10), where a neighbour lost from the map costs most; here it is left out (its module
+# gives the measurements).
 #
 # Below, one image of a reporting world read both ways: the scan's points (black), the network's
 # discs (orange) and the true cylinders (grey).

@@ -38,6 +38,7 @@ from husky_course.evaluation.analysis import obstacle_hit
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.evaluation.stored import evaluate_stored
+from husky_course.imitation.cuts import get_cuts
 from husky_course.imitation.dagger import get_memory
 from husky_course.planners.base import episode_start
 from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner, SnapshotPlanner
@@ -229,6 +230,9 @@ display(Markdown(
 # same images, and each choice is judged in the true world (does a way through remain after it?).
 # `benchmarks/exp_moving_memory.py` prices the map's memory the same way, with shadows told part of
 # the truth: the cylinders it has lost, how each was lost, and where its remembered discs really are.
+# Most of the lost were neighbours whose pieces the cut had joined, and a shadow whose pieces are cut
+# exactly where two cylinders meet is worth as much as one told every lost cylinder: that is what the
+# disc planner's cut network (chapter 8) learns to do.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every
@@ -242,6 +246,7 @@ display(Markdown(
 # %%
 LOOK_AHEAD = profile.eval.look_ahead  # as in chapters 7 and 8
 student_moving = get_memory(moving, progress=False)  # `python -m husky_course train memory --world moving`
+get_cuts(profile, progress=False)  # the disc planner's cut network (`python -m husky_course train cuts`)
 display(Markdown(markdown_table([
     {"round": r["round"], "who drives": r["acting"], "states added": r["states"],
      "success in its training worlds": r["success_in_its_worlds"]} for r in student_moving.rounds])))

@@ -189,6 +189,7 @@ TRAINABLE = (
     "distilled",
     "memory",
     "discs",
+    "cuts",
     "certificate",
 )
 
@@ -214,10 +215,11 @@ def _train(args: argparse.Namespace) -> dict:
                 "path": student.path,
             }
             continue
-        if name == "discs":  # chapter 8's disc network: simulated views, the planner's own perception
+        if name in ("discs", "cuts"):  # chapter 8's disc network, chapter 10's cut network (after it):
+            from .imitation.cuts import get_cuts  # simulated views, the planner's own perception
             from .imitation.discs import get_discs
 
-            _, hist, path = get_discs(profile, progress)
+            _, hist, path = (get_discs if name == "discs" else get_cuts)(profile, progress)
             out[name] = {"best_val_loss": hist.best_val, "epochs": len(hist.train_loss),
                          "seconds": round(hist.seconds, 1), "path": path}
             continue

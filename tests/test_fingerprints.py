@@ -208,3 +208,20 @@ def test_clean_sorts_the_training_logs_as_the_artifacts_they_log(tmp_path, monke
     assert kept in found.current and old in found.stale and round_log in found.unchecked
     assert cli.main(["clean", "--profile", "quick"]) == 0
     assert kept.exists() and not old.exists() and round_log.exists()
+
+
+def test_clean_keeps_the_realistic_disc_network_and_its_cut_network(tmp_path, monkeypatch):
+    """Chapter 11 trains the disc network (and its cut network) on realistic senses: their artifacts are
+    current, as the ideal ones are; a disc network of no current key is stale."""
+    from husky_course.config import with_sensing
+    from husky_course.training.cuts import cut_dir
+
+    monkeypatch.setenv(store.ARTIFACTS_ENV, str(tmp_path / "store"))
+    real = with_sensing(QUICK, "realistic")
+    kept = [discs.disc_dir(real), cut_dir(real), discs.disc_dir(QUICK), cut_dir(QUICK)]
+    old = store.model_dir("discs", {"any": "key"}, QUICK)
+    assert len({p.name for p in kept}) == 4
+    for path in (*kept, old):
+        path.mkdir(parents=True)
+    found = stale.sweep(QUICK)
+    assert set(kept) <= set(found.current) and old in found.stale

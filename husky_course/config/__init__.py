@@ -129,7 +129,7 @@ def _profiles() -> dict[str, Profile]:
             build_minutes=(
                 ("dataset", 0.1), ("encoder_decoder", 0.7), ("reward_net", 0.1), ("safety_image", 0.2),
                 ("safety_prim", 0.2), ("joint", 0.4), ("diagnosis", 0.3), ("rnn", 0.5),
-                ("survival labels", 0.2), ("distilled", 0.3), ("memory", 2), ("discs", 0.3),
+                ("survival labels", 0.2), ("distilled", 0.3), ("memory", 2), ("discs", 0.3), ("cuts", 0.5),
                 ("certificate", 0.4),
             ),
         ),
@@ -138,7 +138,7 @@ def _profiles() -> dict[str, Profile]:
             build_minutes=(
                 ("dataset", 0.2), ("encoder_decoder", 1.5), ("reward_net", 0.4), ("safety_image", 0.5),
                 ("safety_prim", 0.5), ("joint", 1.3), ("diagnosis", 2), ("rnn", 3.3),
-                ("survival labels", 0.9), ("distilled", 2.2), ("memory", 4), ("discs", 1.6),
+                ("survival labels", 0.9), ("distilled", 2.2), ("memory", 4), ("discs", 1.6), ("cuts", 2.5),
                 ("certificate", 2.7),
             ),
         ),

@@ -150,6 +150,11 @@ class DiscConfig:
     margin: float = 0.0
     unexplained: float = 0.05  #: a cylinder piece's points further than this (m) from its disc stay points
     train: TrainConfig = field(default_factory=lambda: TrainConfig(batch_size=256, epochs=40, patience=4))
+    #: on the moving course, a piece is cut again where the cut network (:mod:`husky_course.planners.cuts`)
+    #: gives two cylinders a probability above this (0: no cut network; the static course has none: the
+    #: measurements are in that module)
+    cut: float = 0.3
+    cut_train: TrainConfig = field(default_factory=lambda: TrainConfig(batch_size=512, epochs=30, patience=4))
 
 
 @dataclass(frozen=True)

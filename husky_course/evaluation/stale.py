@@ -7,9 +7,9 @@ entries of ``artifacts/<profile>/`` into
 
 * *current* -- a name today's code and the profile's config give (on either course,
   ``--world static`` or ``moving``): the dataset, the labels and models trained on a dataset
-  that is in the store, the memory student, the disc network, the certificate (at the profile's
-  scale, or at the scale a ``certify`` run recorded in its ``key.json``), a joint model of any
-  ``safety_weight`` its checkpoint records; a stored evaluation whose recorded code fingerprint
+  that is in the store, the memory student, the disc network and its cut network, the certificate
+  (at the profile's scale, or at the scale a ``certify`` run recorded in its ``key.json``), a joint
+  model of any ``safety_weight`` its checkpoint records; a stored evaluation whose recorded code fingerprint
   is today's (:func:`~husky_course.evaluation.stored.stale_evaluation`);
 * *stale* -- every other entry of those kinds (a model of a dataset no longer in the store
   included: build the dataset first to keep it);
@@ -31,10 +31,11 @@ import shutil
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..config import WORLD_KINDS, Profile, check_profile, with_world
+from ..config import SENSING, WORLD_KINDS, Profile, check_profile, with_sensing, with_world
 from ..data.io import DatasetError
 from ..data.store import artifacts_root, dataset_dir, stored_dataset_id
 from ..training.builders import MODELS, checkpoint_dir, labels_dir
+from ..training.cuts import cut_dir
 from ..training.discs import disc_dir
 from ..training.memory import memory_dir
 from ..training.trainer import CheckpointError, read_checkpoint
@@ -42,7 +43,7 @@ from .certificate import KEY_FILE, certificate_dir
 from .stored import stale_evaluation
 
 #: model kinds :func:`sweep` judges (the others under ``models/`` are unchecked)
-JUDGED = (*MODELS, "labels", "memory", "discs", "certificate")
+JUDGED = (*MODELS, "labels", "memory", "discs", "cuts", "certificate")
 
 
 @dataclass
@@ -80,11 +81,20 @@ def _certificate_scales(models: Path, profile: Profile) -> list[Profile]:
 
 
 def current_paths(profile: Profile) -> set[Path]:
-    """Every artifact path today's code and ``profile`` give, on either course (builds nothing)."""
+    """Every artifact path today's code and ``profile`` give, on either course and with either senses
+    (chapter 11's realistic disc network is current too; builds nothing)."""
     profile = check_profile(profile)
     models = artifacts_root() / profile.name / "models"
-    out = {disc_dir(profile)}
     weights = _joint_weights(models)
+    out: set[Path] = set()
+    for senses in SENSING:
+        out |= _current_with(with_sensing(profile, senses), models, weights)
+    return out
+
+
+def _current_with(profile: Profile, models: Path, weights: set[float]) -> set[Path]:
+    """:func:`current_paths` for ``profile``'s senses."""
+    out = {disc_dir(profile), cut_dir(profile)}
     for kind in WORLD_KINDS:
         p = with_world(profile, kind)
         out |= {dataset_dir(p), memory_dir(p)}

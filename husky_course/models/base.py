@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numpy as np
 import torch
 from torch import Tensor, nn
 
@@ -82,6 +83,27 @@ def mlp(widths: list[int]) -> nn.Sequential:
         if i < len(widths) - 2:
             layers.append(nn.ELU())
     return nn.Sequential(*layers)
+
+
+class NumpyMLP:
+    """An :func:`mlp`'s forward pass in numpy, for planners that decide without a torch call.
+
+    It holds copies of the weights, never views: a process pool moves a pickled module's storage to
+    shared memory, which would leave a view of the old storage pointing at freed memory.
+    """
+
+    def __init__(self, net: nn.Sequential) -> None:
+        linears = [m for m in net if isinstance(m, nn.Linear)]
+        self.layers = [(m.weight.detach().cpu().numpy().T.astype(np.float64),
+                        m.bias.detach().cpu().numpy().astype(np.float64)) for m in linears]
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """The last layer's outputs ``(B, out)`` for inputs ``x (B, in)`` (float64)."""
+        for i, (w, b) in enumerate(self.layers):
+            x = x @ w + b
+            if i < len(self.layers) - 1:
+                x = np.where(x > 0, x, np.expm1(np.minimum(x, 0)))
+        return x
 
 
 def count_parameters(module: nn.Module) -> int:

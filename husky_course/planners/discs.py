@@ -43,6 +43,9 @@ training views (6,000 worlds) gave 0.947. On the moving course first sights wide
 copies 0.2 / 0.3 m to each side gave 0.710 / 0.715 against 0.725 (200 worlds); walking discs bounce
 off the side walls where it has seen them (:mod:`~husky_course.planners.walls`).
 
+On the moving course a second network first cuts a piece again where two cylinders meet in it
+(:mod:`~husky_course.planners.cuts`, :meth:`DiscMap.pieces`); the figures above were measured before it.
+
 A trained network decides what the search sees, so it is a learned planner; it receives only what
 every unprivileged planner receives (``tests/test_privileged.py``).
 """
@@ -52,7 +55,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import SimConfig
+from ..models.base import NumpyMLP
 from ..models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
+from .cuts import PieceCutter
 from .mapping import MappingPlanner
 from .motion import segments
 from .perception import DepthScan, EgoMap
@@ -154,22 +159,15 @@ def majority_cylinder(hits: np.ndarray) -> int:
     return top - 2 if top >= 2 and counts.max() * 2 > len(hits) else -1
 
 
-class _NumpyMLP:
+class _NumpyMLP(NumpyMLP):
     """The disc network's forward pass in numpy (same weights; no torch call per decision)."""
 
     def __init__(self, model: DiscNet) -> None:
-        # copies, never views: a process pool moves a pickled module's storage to shared memory,
-        # which would leave a view of the old storage pointing at freed memory
-        linears = [m for m in model.net if hasattr(m, "weight")]
-        self.layers = [(m.weight.detach().cpu().numpy().T.astype(np.float64),
-                        m.bias.detach().cpu().numpy().astype(np.float64)) for m in linears]
+        super().__init__(model.net)
         self.lo, self.span = float(model.radius_lo), float(model.radius_span)
 
-    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        for i, (w, b) in enumerate(self.layers):
-            x = x @ w + b
-            if i < len(self.layers) - 1:
-                x = np.where(x > 0, x, np.expm1(np.minimum(x, 0)))
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # type: ignore[override]
+        x = super().__call__(x)
         return x[:, 0], x[:, 1:3], self.lo + self.span / (1 + np.exp(-x[:, 3]))
 
 
@@ -189,6 +187,7 @@ class DiscMap:
     ) -> None:
         cfg = config or SimConfig()
         self.unexplained = float(unexplained)
+        self.cutter: PieceCutter | None = None  #: cuts pieces again where two cylinders meet (None: never)
         self.reader = PieceReader(cfg)
         self.walls = EgoMap(self.reader.scan, forget_behind)
         self.forward = _NumpyMLP(model)
@@ -208,9 +207,17 @@ class DiscMap:
     def read(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(d, discs (k, 3), other (size,))`` of one image: its per-column depth, the discs its
         cylinder pieces predict, and which columns belong to the other pieces (walls)."""
-        d, cols, pts, pieces = self.reader.pieces(obs)
+        d, cols, pts, pieces = self.pieces(obs)
         discs, cyl, other = self.decode(d, cols, pts, pieces)
         return d, discs[cyl], other
+
+    def pieces(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+        """The image's pieces (:meth:`PieceReader.pieces`), each cut again where :attr:`cutter` says two
+        cylinders meet (read by the network first, :mod:`~husky_course.planners.cuts`)."""
+        d, cols, pts, pieces = self.reader.pieces(obs)
+        if self.cutter is not None and pieces:
+            pieces = self.cutter(self, d, cols, pts, pieces)
+        return d, cols, pts, pieces
 
     def decode(
         self, d: np.ndarray, cols: np.ndarray, pts: np.ndarray, pieces: list[np.ndarray]
@@ -286,18 +293,20 @@ class DiscPlanner(MappingPlanner):
     """The mapping planner's search over a map of learned discs (module docstring).
 
     ``grow`` (m) is added to every predicted radius before planning (a margin for the network's
-    errors); the mapping planner's settings (``horizon``, ``margin``, ...) pass through.
+    errors); ``cutter`` cuts the image's pieces again where two cylinders meet (:mod:`.cuts`; None:
+    never); the mapping planner's settings (``horizon``, ``margin``, ...) pass through.
     """
 
     name = "discs"
 
     def __init__(
         self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0, unexplained: float = 0.05,
-        **kwargs: float,
+        cutter: PieceCutter | None = None, **kwargs: float,
     ) -> None:
         super().__init__(config, **kwargs)
         self.model, self.grow = model.eval(), float(grow)
         self.map = DiscMap(model, self.config, self.map.forget_behind, unexplained)  # type: ignore[assignment]
+        self.map.cutter = cutter
 
     @property
     def points(self) -> np.ndarray:

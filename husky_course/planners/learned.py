@@ -40,11 +40,13 @@ from ..config import EvalPlan, Profile, check_profile, world_kind
 from ..models.rnn import RNNLookahead
 from ..models.safety import JointModel, SurvivalNet
 from ..training import builders
+from ..training.cuts import load_cuts
 from ..training.discs import load_discs
 from ..training.inference import model_device, single_thread
 from ..training.memory import load_memory
 from ..training.trainer import CheckpointError
 from .base import Planner, PlannerError, check_look_ahead, check_observation, survival_scores
+from .cuts import PieceCutter
 
 REWARDS = ("applied", "next_image")
 
@@ -208,6 +210,16 @@ MODEL_OF = {
 }
 
 
+def disc_cutter(profile: Profile, moving: bool, threshold: float | None = None) -> PieceCutter | None:
+    """The disc planner's cut network at ``threshold`` (default: the profile's on the ``moving`` course,
+    ``profile.discs.cut``, and none on the static one; 0: none), loaded (never trained: ``python -m
+    husky_course train cuts`` trains it after the disc network,
+    :func:`husky_course.imitation.cuts.get_cuts`)."""
+    if threshold is None:
+        threshold = profile.discs.cut if moving else 0.0
+    return PieceCutter(load_cuts(profile)[0], float(threshold)) if threshold > 0 else None
+
+
 def make_learned_planner(
     name: str, profile: Profile, look_ahead: int | None = None, train: bool = False, **kwargs: Any
 ) -> Planner:
@@ -235,8 +247,10 @@ def make_learned_planner(
             d = profile.discs
             config = kwargs.pop("config", profile.sim)  # the course it runs on: discs walk on the moving one
             settings = {"grow": d.grow, "margin": d.margin, "unexplained": d.unexplained, **kwargs}
-            cls = DiscTrackingPlanner if world_kind(config) == "moving" else DiscPlanner
-            return cls(load_discs(profile)[0], config, **settings)
+            moving = world_kind(config) == "moving"
+            cls = DiscTrackingPlanner if moving else DiscPlanner
+            cutter = disc_cutter(profile, moving, settings.pop("cut", None))
+            return cls(load_discs(profile)[0], config, cutter=cutter, **settings)
         if train:
             model = builders.BUILDERS[MODEL_OF[name]](profile, True).model
         else:

@@ -20,6 +20,7 @@ import numpy as np
 from ..config import ArrivalsConfig, SimConfig, TrackingConfig, WallsConfig
 from ..models.discs import DiscNet
 from .arrivals import Arrivals
+from .cuts import PieceCutter
 from .discs import DiscMap, DiscPlanner
 from .motion import MotionMemory
 from .tracking import TrackingPlanner, _set_doubt
@@ -81,7 +82,7 @@ class WalkingDiscMap(DiscMap):
         return group, self.doubt[open_]
 
     def add(self, obs: np.ndarray) -> None:
-        d, cols, pts, pieces = self.reader.pieces(obs)
+        d, cols, pts, pieces = self.pieces(obs)
         discs, cyl, other = self.decode(d, cols, pts, pieces)
         centres = np.where(cyl[:, None] & self.centres, discs[:, :2], np.nan)  # the tracks' sightings
         v = self.motion.update(pts, pieces, centres)
@@ -140,10 +141,11 @@ class DiscTrackingPlanner(DiscPlanner):
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
                  speed_sigma: float = ArrivalsConfig.speed_sigma, centres: bool = TrackingConfig.disc_centres,
-                 **kwargs: float) -> None:
+                 cutter: PieceCutter | None = None, **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres)
+        self.map.cutter = cutter
         _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma)
 
     @property

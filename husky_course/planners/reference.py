@@ -304,6 +304,7 @@ class ToldDiscsPlanner(DiscTrackingPlanner):
     def __init__(self, profile=None, rule: str = TOLD_RULES[0], config=None) -> None:
         from ..config import get_profile, with_world
         from ..training.discs import load_discs  # the trained network (torch)
+        from .learned import disc_cutter
 
         if rule not in TOLD_RULES:
             raise ValueError(f"rule must be one of {TOLD_RULES}, got {rule!r}")
@@ -311,7 +312,8 @@ class ToldDiscsPlanner(DiscTrackingPlanner):
         d = profile.discs
         sigma = ArrivalsConfig.speed_sigma if rule == TOLD_RULES[0] else 0.0  # every speed told: no doubt
         super().__init__(load_discs(profile)[0], config or with_world(profile, "moving").sim, grow=d.grow,
-                         unexplained=d.unexplained, margin=d.margin, speed_sigma=sigma)
+                         unexplained=d.unexplained, margin=d.margin, speed_sigma=sigma,
+                         cutter=disc_cutter(profile, moving=True))
         self.map.__class__ = _ToldMap
         self.map.rule = rule  # type: ignore[attr-defined]
         self.name = f"discs, told {rule} (privileged)"
