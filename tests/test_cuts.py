@@ -119,3 +119,21 @@ def test_the_trained_cut_network_finds_where_two_cylinders_meet():
     assert truth.mean() < 0.05
     precision, recall = (found & truth).sum() / max(found.sum(), 1), (found & truth).sum() / truth.sum()
     assert precision > 0.5 and recall > 0.3, (precision, recall)
+
+
+def test_the_moving_disc_planner_cuts_and_the_static_one_does_not():
+    """``DiscConfig.cut`` on the moving course; none on the static course (its module's measurements),
+    unless asked for; ``cut=0`` turns it off."""
+    import checkpoints
+
+    from husky_course.config import with_world
+    from husky_course.planners.registry import make_planner
+
+    moving = with_world(QUICK, "moving")
+    checkpoints.trained("discs")  # a missing network fails, naming the command that trains it
+    on_moving = make_planner("discs", profile=QUICK, config=moving.sim)
+    assert isinstance(on_moving.map.cutter, PieceCutter)
+    assert np.isclose(on_moving.map.cutter.logit, np.log(QUICK.discs.cut / (1 - QUICK.discs.cut)))
+    assert make_planner("discs", profile=QUICK).map.cutter is None
+    assert make_planner("discs", profile=QUICK, cut=0.5).map.cutter is not None
+    assert make_planner("discs", profile=QUICK, config=moving.sim, cut=0).map.cutter is None
