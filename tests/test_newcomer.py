@@ -116,6 +116,7 @@ def _message(fn: Callable[[], object]) -> str:
 
 def _missing_messages(profile) -> dict[str, str]:  # type: ignore[no-untyped-def]
     from husky_course.evaluation.certificate import load_certificate
+    from husky_course.training.cuts import load_cuts
     from husky_course.training.discs import load_discs
     from husky_course.training.memory import load_memory
 
@@ -124,6 +125,7 @@ def _missing_messages(profile) -> dict[str, str]:  # type: ignore[no-untyped-def
         found[f"planner {n}"] = _message(lambda n=n: make_planner(n, profile=profile))
     found["load_memory"] = _message(lambda: load_memory(profile))
     found["load_discs"] = _message(lambda: load_discs(profile))
+    found["load_cuts"] = _message(lambda: load_cuts(profile))
     found["load_certificate"] = _message(lambda: load_certificate(profile))
     return found
 
@@ -132,6 +134,7 @@ def _missing_messages(profile) -> dict[str, str]:  # type: ignore[no-untyped-def
 def test_a_missing_artifact_names_the_command_that_builds_it(
     world: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    from husky_course.training.cuts import cut_dir
     from husky_course.training.discs import disc_dir
 
     monkeypatch.setenv(ARTIFACTS_ENV, str(tmp_path / "empty-store"))
@@ -145,6 +148,8 @@ def test_a_missing_artifact_names_the_command_that_builds_it(
         built = with_world(get_profile(args.profile), args.world)
         if args.model == "discs":  # one network for both courses: the same artifact either way
             assert disc_dir(built) == disc_dir(profile), f"{where}: {message}"
+        elif args.model == "cuts":  # so is the cut network that reads with it
+            assert cut_dir(built) == cut_dir(profile), f"{where}: {message}"
         else:
             assert built == profile, f"{where}: `{commands[0]}` builds the {args.world} course's artifact"
 

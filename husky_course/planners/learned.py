@@ -249,8 +249,9 @@ def make_learned_planner(
             settings = {"grow": d.grow, "margin": d.margin, "unexplained": d.unexplained, **kwargs}
             moving = world_kind(config) == "moving"
             cls = DiscTrackingPlanner if moving else DiscPlanner
+            discs = load_discs(profile)[0]  # named first when missing: the cut network reads with it
             cutter = disc_cutter(profile, moving, settings.pop("cut", None))
-            return cls(load_discs(profile)[0], config, cutter=cutter, **settings)
+            return cls(discs, config, cutter=cutter, **settings)
         if train:
             model = builders.BUILDERS[MODEL_OF[name]](profile, True).model
         else:
