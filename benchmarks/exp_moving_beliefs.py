@@ -42,6 +42,7 @@ from multiprocessing import Pool
 import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
+from husky_course.engines import limit_worker_threads
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
@@ -149,7 +150,7 @@ def main() -> None:
     profile = with_world(get_profile(args.profile), "moving")
     seeds = [int(s) for s in eval_world_seeds(args.worlds, 1)]
     parts = [(profile, seeds[i:: args.workers]) for i in range(args.workers)]
-    with Pool(args.workers) as pool:
+    with Pool(args.workers, initializer=limit_worker_threads) as pool:
         found = pool.map(chunk, parts)
     rows: dict[str, list] = defaultdict(list)
     for part in found:

@@ -50,6 +50,7 @@ import numpy as np
 from exp_moving_failures import crossable
 
 from husky_course.config import Profile, get_profile, with_world
+from husky_course.engines import limit_worker_threads
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
@@ -148,7 +149,7 @@ def main() -> None:
     seeds = [int(s) for s in eval_world_seeds(args.worlds, 1)]
     parts = [(profile, seeds[i :: args.workers]) for i in range(args.workers)]
     if args.workers > 1:
-        with Pool(args.workers) as pool:
+        with Pool(args.workers, initializer=limit_worker_threads) as pool:
             found = [r for part in pool.map(chunk, parts) for r in part]
     else:
         found = chunk(parts[0])

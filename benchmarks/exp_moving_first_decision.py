@@ -41,6 +41,7 @@ import numpy as np
 from exp_moving_failures import crossable
 
 from husky_course.config import Profile, get_profile, with_world
+from husky_course.engines import limit_worker_threads
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.planners.base import episode_start
 from husky_course.planners.registry import make_planner
@@ -100,7 +101,7 @@ def main() -> None:
     profile = with_world(get_profile(args.profile), "moving")
     jobs = [(profile, int(s), args.draws) for s in eval_world_seeds(args.worlds, 1)]
     if args.workers > 1:
-        with Pool(args.workers) as pool:
+        with Pool(args.workers, initializer=limit_worker_threads) as pool:
             found = pool.map(judge, jobs, chunksize=1)
     else:
         found = [judge(job) for job in jobs]

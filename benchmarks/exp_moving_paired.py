@@ -91,6 +91,7 @@ from exp_moving_fatal import survives
 
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.course.diagnosis import sign_test
+from husky_course.engines import limit_worker_threads
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.evaluation.rollout import Rollout
 from husky_course.planners.base import episode_start
@@ -179,7 +180,7 @@ def main(argv: list[str] | None = None) -> None:
     parts = [(profile, seeds[i : i + 10], variants) for i in range(0, len(seeds), 10)]
     t0 = time.perf_counter()
     if args.workers > 1:
-        with Pool(args.workers) as pool:
+        with Pool(args.workers, initializer=limit_worker_threads) as pool:
             done = list(tqdm(pool.imap(chunk, parts), total=len(parts), desc="worlds / 10"))
     else:
         done = [chunk(part) for part in tqdm(parts, desc="worlds / 10")]

@@ -9,9 +9,9 @@ and for any number of workers.
 
 A task must be a picklable, module-level function of picklable arguments: simulators (PyBullet's
 included) are built inside the task from a backend name and a config, never shipped live. Each task
-runs with one torch thread (:func:`_one_thread`), so parallel tasks do not fight over cores. Ray is
-an optional extra (``pip install -e .[ray]``; ``make install`` installs it) imported only when the
-``ray`` engine is used: ``import husky_course`` never needs it.
+runs with one torch thread and one thread of numpy's BLAS (:func:`_one_thread`), so parallel tasks do
+not fight over cores. Ray is an optional extra (``pip install -e .[ray]``; ``make install`` installs
+it) imported only when the ``ray`` engine is used: ``import husky_course`` never needs it.
 """
 
 from __future__ import annotations
@@ -43,6 +43,10 @@ class EngineConfig:
     worlds_per_task: int = 25  #: evaluation worlds per task (a Ray task costs about a millisecond)
     max_retries: int = 3  #: times Ray re-runs a task whose worker process died
     object_store_mb: int = 512  #: object store of a local Ray cluster started on demand
+    #: threads of numpy's BLAS (OpenBLAS) in a worker process (``None``: the library's own, one per core).
+    #: Two workers on two cores, each with two BLAS threads, fight over the cores: one per worker made the
+    #: moving disc planner's evaluation 2.0x as fast, the same episodes (``benchmarks/bench_threads.py``)
+    worker_blas_threads: int | None = 1
 
 
 ENGINE = EngineConfig()
@@ -73,37 +77,56 @@ def set_engine(name: str | None) -> str:
 
 
 @contextlib.contextmanager
-def _one_thread(worker: bool) -> Iterator[None]:
-    """Run the body with one torch thread (the previous count is restored afterwards).
+def _one_thread(worker: bool, blas: int | None = None) -> Iterator[None]:
+    """Run the body with one torch thread (the previous count is restored afterwards) and, in a
+    ``worker`` process, ``blas`` threads of numpy's BLAS (``None``: as it is).
 
     Torch is not imported for a task that does not use it: in a ``worker`` process where it is not
     loaded yet, ``OMP_NUM_THREADS=1`` makes a torch imported later start with one thread. In the
     caller's own process (serial local work) nothing changes unless torch is already loaded.
     """
-    if "torch" not in sys.modules:
-        if worker:
-            os.environ["OMP_NUM_THREADS"] = "1"
-        yield
-        return
-    import torch
+    with contextlib.ExitStack() as stack:
+        if worker and blas is not None:
+            from threadpoolctl import threadpool_limits
 
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
+            stack.enter_context(threadpool_limits(limits=int(blas), user_api="blas"))
+        if "torch" not in sys.modules:
+            if worker:
+                os.environ["OMP_NUM_THREADS"] = "1"
+            yield
+            return
+        import torch
+
+        before = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            yield
+        finally:
+            torch.set_num_threads(before)
 
 
-def _call(fn: Callable[..., Any], shared: Any, task: Any, worker: bool = True) -> Any:
-    with _one_thread(worker):
+def _call(fn: Callable[..., Any], shared: Any, task: Any, worker: bool = True,
+          blas: int | None = None) -> Any:
+    with _one_thread(worker, blas):
         return fn(task) if shared is None else fn(shared, task)
+
+
+def limit_worker_threads() -> None:
+    """Give this process one torch thread and :data:`ENGINE`'s BLAS threads for good: the initializer
+    of a script's own ``multiprocessing.Pool`` (the library's tasks get them from :func:`map_tasks`)."""
+    os.environ["OMP_NUM_THREADS"] = "1"
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(1)
+    if ENGINE.worker_blas_threads is not None:
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=int(ENGINE.worker_blas_threads), user_api="blas")
 
 
 def _pool_job(job: tuple) -> tuple[int, Any]:
     """One task in a local pool process: ``(index, result)``."""
-    i, fn, shared, task = job
-    return i, _call(fn, shared, task)
+    i, fn, shared, task, blas = job
+    return i, _call(fn, shared, task, blas=blas)
 
 
 def ray_init_args(workers: int, config: EngineConfig = ENGINE) -> dict[str, Any]:
@@ -149,9 +172,9 @@ def shutdown_ray() -> None:
         _started_here = False
 
 
-def _husky_task(fn: Callable[..., Any], shared: Any, task: Any) -> Any:
+def _husky_task(fn: Callable[..., Any], shared: Any, task: Any, blas: int | None) -> Any:
     """The body of every Ray task (its process title reads ``ray::_husky_task`` while it runs)."""
-    return _call(fn, shared, task)
+    return _call(fn, shared, task, blas=blas)
 
 
 @functools.lru_cache(maxsize=4)
@@ -172,7 +195,7 @@ def map_tasks(
     sizes: Sequence[int] | None = None,
     initial: int = 0,
     progress: bool = True,
-    config: EngineConfig = ENGINE,
+    config: EngineConfig | None = None,
 ) -> list[Any]:
     """``[fn(task) for task in tasks]`` (or ``fn(shared, task)``) on an engine, results in task order.
 
@@ -193,15 +216,17 @@ def map_tasks(
     desc, unit, sizes, initial, progress :
         The progress bar: its label, its unit, how many units each task counts (default 1), the
         units already done before this call (a resumed job), and whether to show it at all.
-    config : EngineConfig
-        ``max_retries``: how often Ray re-runs a task whose worker process died.
+    config : EngineConfig, optional
+        Default: the module's :data:`ENGINE` as it is at the call (a benchmark may replace it).
+        ``max_retries``: how often Ray re-runs a task whose worker process died;
+        ``worker_blas_threads``: numpy's BLAS threads in each worker process.
 
     Returns
     -------
     list
         One result per task, in the order of ``tasks``, whatever the order they finished in.
     """
-    engine = resolve_engine(engine)
+    engine, config = resolve_engine(engine), config or ENGINE
     if not is_int(workers) or workers < 1:  # type: ignore[operator]
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
     tasks = list(tasks)
@@ -215,7 +240,8 @@ def map_tasks(
             ray = _ray(workers)
             remote = _remote(int(config.max_retries))
             ref = None if shared is None else ray.put(shared)  # sent once, not once per task
-            pending = {remote.remote(fn, ref, task): i for i, task in enumerate(tasks)}
+            blas = config.worker_blas_threads
+            pending = {remote.remote(fn, ref, task, blas): i for i, task in enumerate(tasks)}
             waiting = list(pending)
             while waiting:
                 ready, waiting = ray.wait(waiting, num_returns=1)
@@ -231,7 +257,7 @@ def map_tasks(
             import multiprocessing as mp
 
             ctx = mp.get_context()  # the platform's default start method (tasks are picklable)
-            jobs = [(i, fn, shared, task) for i, task in enumerate(tasks)]
+            jobs = [(i, fn, shared, task, config.worker_blas_threads) for i, task in enumerate(tasks)]
             with ctx.Pool(min(workers, len(jobs))) as pool:
                 for i, result in pool.imap_unordered(_pool_job, jobs):
                     results[i] = result

@@ -48,6 +48,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"{TUNING} \(tuning\)[\s\S]*evaluate oracle \(3 worlds\)[\s\S]*total +\d+\.\d s",
     ),
     "bench_planners.py": (["--worlds", "3"], rf"3 worlds of {TUNING}\n[\s\S]*oracle +success 1\.000"),
+    "bench_threads.py": (
+        ["--profile", "quick", "--worlds", "4", "--workers", "2"],
+        rf"discs on 4 moving tuning worlds \({TUNING}, quick profile, 2 workers\): one BLAS thread per "
+        r"worker is \d+\.\d\dx as fast; same episodes: True",
+    ),
     "bench_training.py": (["--profile", "quick"], r"total training[\s\S]*joint model +AUC 0\.\d{3}"),
     "exp_dagger.py": (
         ["--profile", "quick", "--worlds", "2", "--eval-worlds", "3", "--epochs", "1", "--max-images", "400"],

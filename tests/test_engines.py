@@ -63,6 +63,12 @@ def _torch_threads(_: int) -> int:
     return torch.get_num_threads()
 
 
+def _blas_threads(_: int) -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
 # Ray workers cannot import this test module: send its functions by value (the library's are
 # imported by the workers from the installed package)
 ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
@@ -126,6 +132,24 @@ def test_every_task_runs_with_one_torch_thread(ray_cluster):
     assert map_tasks(_torch_threads, [0, 1], engine="local", workers=2, progress=False) == [1, 1]
     assert map_tasks(_torch_threads, [0, 1], engine="local", workers=1, progress=False) == [1, 1]
     assert torch.get_num_threads() == before  # serial work in this process: restored afterwards
+
+
+def test_every_worker_runs_numpy_with_one_blas_thread(ray_cluster, monkeypatch):
+    """Two workers on two cores with numpy's own BLAS threads (one per core each) fight over the
+    cores (``benchmarks/bench_threads.py``); each worker gets one, and ``None`` leaves what it has
+    (here two: ``make test`` itself starts numpy with one, through ``OMP_NUM_THREADS``)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        own = _blas_threads(0)
+        assert own and set(own) == {2}, f"numpy's BLAS should report two threads here: {own}"
+        one = [[1] * len(own)] * 2
+        for engine in ("local", "ray"):
+            assert map_tasks(_blas_threads, [0, 1], engine=engine, workers=2, progress=False) == one
+        serial = map_tasks(_blas_threads, [0], engine="local", workers=1, progress=False)
+        assert serial == [own]  # serial work in this process: as it is
+        monkeypatch.setattr(engines, "ENGINE", replace(engines.ENGINE, worker_blas_threads=None))
+        assert map_tasks(_blas_threads, [0, 1], engine="local", workers=2, progress=False) == [own, own]
 
 
 def test_collection_is_the_same_bytes_on_ray(tmp_path, ray_cluster):
