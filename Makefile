@@ -100,6 +100,7 @@ bench: install  ## speeds measured side by side: collection, decisions, training
 	$(PY) benchmarks/bench_training.py --profile $(PROFILE)
 	$(PY) benchmarks/bench_pipeline.py --profile $(PROFILE)
 	$(PY) benchmarks/bench_engines.py --profile $(PROFILE)
+	$(PY) benchmarks/bench_threads.py --profile $(PROFILE)
 
 clean:
 	rm -rf _build
