@@ -56,6 +56,11 @@ rule                                                    fatal  only rule  only d
 ``mj``                                                     79         27           99  < 0.001
 ======================================================  =====  =========  ===========  =======
 
+The table is the planner's before it carried the cut network (``planners/cuts.py``). Priced again with
+it (worlds 0-499, 4,523 winnable decisions, 70 fatal choices of the driver, 405 s): ``j`` 68 (12 / 14,
+p = 0.85: a perfect cut adds nothing that can be shown), ``m`` 44 (12 / 38, p < 0.001), ``l`` 57
+(1 / 14, p = 0.001).
+
 Of the 51 fatal choices that exact seen cylinders remove beyond every disc's motion (106 to 55), the
 lost cylinders account for 37 (106 to 69); the remembered discs' drift off their cylinders for 3
 (106 to 103), this image's discs' own errors for 7. (A prototype of this script, on the same worlds, gave the
