@@ -74,6 +74,9 @@ holds the seen cylinders where they are; every disc's motion alone, less than ha
 remembers of what it has seen (discs off their cylinders, lost cylinders) is where the next gain lies,
 more than in how it reads motion or how it decides.
 
+``--save F`` writes every compared decision to ``F`` as each ten worlds finish (a killed run loses only
+the worlds in flight); the same command, or one asking for more worlds, given ``F`` again resumes from it.
+
 A variant is a comma-separated list of the disc planner's settings (``key=value``, values as Python
 literals: ``samples=0``, ``margin=0.05``, ``horizon=6``, ``speed_sigma=0.0``).
 """
@@ -82,7 +85,9 @@ from __future__ import annotations
 
 import argparse
 import ast
+import os
 import time
+from contextlib import nullcontext
 from multiprocessing import Pool
 
 import numpy as np
@@ -162,6 +167,35 @@ def chunk(args: tuple[Profile, list[int], list[str]]) -> list[dict]:
     return out
 
 
+def load_done(path: str, variants: list[str], profile: str) -> dict[int, list]:
+    """The worlds an earlier run with ``--save path`` finished, ``{seed: rows}`` (empty when there is no
+    such file); a clear error when it was made with other variants or another profile."""
+    if not os.path.exists(path):
+        return {}
+    with np.load(path, allow_pickle=False) as f:
+        kept = [str(v) for v in f["variants"]]
+        made = str(f["profile"]) if "profile" in f.files else "?"
+        if kept != variants or made != profile:
+            raise SystemExit(f"{path} holds the variants {kept} of the {made} profile; this run asks for "
+                             f"{variants} of the {profile} profile: name another --save file")
+        seed, driver, fatal, differs = f["seed"], f["driver"], f["fatal"], f["differs"]
+        return {int(w): [(bool(driver[i]), fatal[i].tolist(), differs[i].tolist())
+                         for i in np.flatnonzero(seed == w)] for w in f["worlds"]}
+
+
+def save(path: str, variants: list[str], profile: str, worlds: list[dict]) -> None:
+    """Every compared decision of ``worlds`` to ``path`` (written whole, then renamed over it: a run
+    killed while writing leaves the last complete file)."""
+    rows = [r for w in worlds for r in w["rows"]]
+    tmp = f"{path}.partial.npz"
+    np.savez(tmp, variants=np.array(variants, str), profile=np.array(profile), driver=np.array(
+        [r[0] for r in rows], bool), seed=np.array([w["seed"] for w in worlds for _ in w["rows"]], int),
+             fatal=np.array([r[1] for r in rows], bool).reshape(len(rows), len(variants)),
+             differs=np.array([r[2] for r in rows], bool).reshape(len(rows), len(variants)),
+             worlds=np.array([w["seed"] for w in worlds], int))
+    os.replace(tmp, path)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
@@ -170,33 +204,34 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--variants", nargs="+", default=["samples=0", "margin=0.05", "horizon=6"])
     parser.add_argument("--check", action="store_true", help="also shadow the driver itself (must agree)")
-    parser.add_argument("--save", help="write every compared decision to this .npz (to pool slices later)")
+    parser.add_argument("--save", help="write every compared decision to this .npz as the worlds finish "
+                        "(to pool slices later); a run given the same file again resumes: it reuses the "
+                        "worlds the file holds")
     args = parser.parse_args(argv)
     variants = [v for v in args.variants if v.strip()] + ([AS_IT_IS] if args.check else [])
     for v in variants:
         parse_variant(v)
     profile = with_world(get_profile(args.profile), "moving")
     seeds = [int(s) for s in eval_world_seeds(args.start + args.worlds, 1)[args.start :]]
-    parts = [(profile, seeds[i : i + 10], variants) for i in range(0, len(seeds), 10)]
+    done = load_done(args.save, variants, profile.name) if args.save else {}
+    if done:
+        print(f"resuming from {args.save}: {sum(s in done for s in seeds)} of the {len(seeds)} worlds done")
+    todo = [s for s in seeds if s not in done]
+    parts = [(profile, todo[i : i + 10], variants) for i in range(0, len(todo), 10)]
     t0 = time.perf_counter()
-    if args.workers > 1:
-        with Pool(args.workers, initializer=limit_worker_threads) as pool:
-            done = list(tqdm(pool.imap(chunk, parts), total=len(parts), desc="worlds / 10"))
-    else:
-        done = [chunk(part) for part in tqdm(parts, desc="worlds / 10")]
-    worlds = [w for part in done for w in part]
+    finished = {s: {"seed": s, "rows": rows} for s, rows in done.items()}
+    with Pool(args.workers, initializer=limit_worker_threads) if args.workers > 1 else nullcontext() as pool:
+        for part in tqdm((pool.imap if pool else map)(chunk, parts), total=len(parts), desc="worlds / 10"):
+            finished.update({w["seed"]: w for w in part})
+            if args.save:
+                save(args.save, variants, profile.name, list(finished.values()))
+    worlds = [finished[s] for s in seeds]
     rows = [r for w in worlds for r in w["rows"]]
     driver = np.array([r[0] for r in rows], bool)
     first, end = args.start, args.start + args.worlds - 1
     print(f"discs on moving tuning worlds {first}-{end} (evaluation set 1, {args.profile} profile): "
           f"{len(rows)} winnable decisions compared, {int(driver.sum())} fatal choices of the driver "
           f"({time.perf_counter() - t0:.0f} s)")
-    if args.save:
-        np.savez(args.save, variants=np.array(variants, str), driver=driver,
-                 seed=np.array([w["seed"] for w in worlds for _ in w["rows"]], int),
-                 fatal=np.array([r[1] for r in rows], bool).reshape(len(rows), len(variants)),
-                 differs=np.array([r[2] for r in rows], bool).reshape(len(rows), len(variants)),
-                 worlds=np.array([w["seed"] for w in worlds], int))
     crossed = np.mean([bool(w["rows"]) and not w["rows"][-1][0] for w in worlds])
     print(f"the driver crossed {crossed:.3f} of the worlds (each had a way through, and no choice of "
           "the driver's closed it)")
