@@ -218,9 +218,12 @@ display(Markdown(
 # as the course's rule of motion allows, among the walks no earlier column saw through, and each
 # tracked walker at its track's speed plus a normal error (spread `ArrivalsConfig.speed_sigma`). It
 # searches every version and takes the first primitive whose plans survive the most steps on
-# average, ties going to its own map's ranking. An average, unlike a worst-case band around every
-# doubtful cylinder, keeps a tight pass that most versions survive; the measurements on the tuning
-# set are in `ArrivalsConfig`. Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py`
+# average. An average, unlike a worst-case band around every doubtful cylinder, keeps a tight pass
+# that most versions survive; the measurements on the tuning set are in `ArrivalsConfig`. Most
+# decisions end in a tie: several primitives survive every version to the horizon. The tie goes to
+# the one whose plan keeps the most clearance in its worst version, then on average over the
+# versions (`ArrivalsConfig.ties`), not to the one its single guess of the motion ranks first:
+# a pass that stays wide whatever the doubted cylinders do (`benchmarks/exp_moving_ties.py`). Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py`
 # measures along the planner's own runs, each belief beside the truth (privileged, an analysis tool).
 # The tracker plans on its map's single guess.
 # Telling such rules apart takes care: a rule that changes many of the planner's choices moves its

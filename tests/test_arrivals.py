@@ -242,13 +242,14 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
     """With ``samples`` and ``speed_sigma``, every draw gives each walker the tracks follow its track's
     speed plus a normal error of spread ``speed_sigma`` and each undecided first sight a walk from its
     weights; nothing else (standing discs, walls) moves. The choice is the first primitive with the most
-    mean safe steps over the draws, the same seed draws the same walks, and ``speed_sigma`` 0 draws no
-    error: the first sights' draws alone."""
+    mean safe steps over the draws, its ties broken by the draws' clearance (``ties="draws"``, the
+    fewest bins over the draws, then their mean) or by the map's own rank (``ties="map"``); the same
+    seed draws the same walks, and ``speed_sigma`` 0 draws no error: the first sights' draws alone."""
     from husky_course.config import get_profile, with_world
     from husky_course.evaluation.episodes import eval_world_seeds, run_episode
     from husky_course.planners.mapping import MappingPlanner
     from husky_course.planners.registry import make_planner
-    from husky_course.planners.tracking import _ranked
+    from husky_course.planners.tracking import _bins, _ranked, _steps
     from husky_course.sim.fast import FastSimulator
 
     profile = with_world(get_profile("quick"), "moving")
@@ -256,16 +257,17 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
     errors: list[float] = []
     decisions: list[bool] = []
     alone: list[bool] = []  # a decision that draws though no first sight is in doubt
+    broken: list[bool] = []  # a decision whose choice the draws' clearance changed
 
-    def checked(sigma: float):
+    def checked(sigma: float, ties: str = "draws"):
         planner = make_planner("discs", config=profile.sim, profile=profile, samples=samples,
-                               speed_sigma=sigma)
-        decide, steps_if, draws = planner._decide, planner._steps_if, []
+                               speed_sigma=sigma, ties=ties)
+        decide, keys_if, draws = planner._decide, planner._keys_if, []
 
         def record(horizon: int, speeds: np.ndarray) -> np.ndarray:
-            steps = steps_if(horizon, speeds)
-            draws.append((speeds.copy(), steps))
-            return steps
+            keys = keys_if(horizon, speeds)
+            draws.append((speeds.copy(), keys))
+            return keys
 
         def check(horizon: int) -> tuple[int, np.ndarray]:
             draws.clear()
@@ -278,16 +280,24 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
                 assert len(draws) == samples and (speeds[:, still] == base[still]).all()
                 errors.extend((speeds[:, tracked] - base[tracked]).ravel())
                 keys = MappingPlanner._decide(planner, horizon)[1]
-                expect = _ranked(np.mean([s for _, s in draws], axis=0), keys)
+                mean = np.mean([_steps(k) for _, k in draws], axis=0)
+                bins = np.array([_bins(k) for _, k in draws])
+                plain = _ranked(mean, keys)
+                expect = _ranked(mean, keys, (bins.min(0), bins.mean(0))) if ties == "draws" else plain
                 decisions.append(choice == expect[0] and np.array_equal(ranked, expect[1]))
                 alone.append(not planner.doubtful.any())
+                broken.append(expect[0] != plain[0])
             return choice, ranked
 
-        planner._steps_if, planner._decide = record, check
+        planner._keys_if, planner._decide = record, check
         return planner
 
     actions = [run_episode(checked(0.05), sim, s).actions for s in seeds]
-    assert decisions and all(decisions) and any(alone)
+    assert decisions and all(decisions) and any(alone) and any(broken)
+    decisions.clear()
+    for s in seeds:
+        run_episode(checked(0.05, "map"), sim, s)
+    assert decisions and all(decisions)
     assert len(errors) > 100 and np.std(errors) == pytest.approx(0.05, rel=0.25)
     assert abs(np.mean(errors)) < 0.02
     again = [run_episode(make_planner("discs", config=profile.sim, profile=profile, samples=samples,
@@ -299,3 +309,22 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
     assert not np.any(errors)  # no error drawn: the first sights' draws alone
     with pytest.raises(ValueError, match="speed_sigma"):
         make_planner("discs", config=profile.sim, profile=profile, speed_sigma=-0.1)
+    with pytest.raises(ValueError, match="ties"):
+        make_planner("discs", config=profile.sim, profile=profile, ties="clearance")
+
+
+def test_ties_of_the_draws_mean_go_to_the_most_clearance_in_the_worst_draw_then_on_average():
+    """``_ranked``: the most mean safe steps first, whatever the clearance; among equals, the most
+    clearance bins in the worst draw, then the most on average, then the map's own rank, then the
+    lowest index; a primitive that touches at once is never chosen over one that does not."""
+    from husky_course.planners.tracking import _ranked
+
+    keys = np.array([5_010_000.0, 5_015_000.0, 5_012_000.0, 5_012_000.0, -1e9])
+    mean = np.array([4.5, 4.5, 4.5, 4.5, 5.0])
+    least, average = np.array([3.0, 2.0, 3.0, 3.0, 9.0]), np.array([6.0, 9.0, 7.0, 7.0, 9.0])
+    assert _ranked(mean, keys)[0] == 1  # the map's own rank
+    choice, ranked = _ranked(mean, keys, (least, average))
+    assert choice == 2 and ranked[4] == keys[4]  # 2 and 3 tie in everything: the lowest index
+    assert np.argsort(-ranked[:4], kind="stable").tolist() == [2, 3, 0, 1]
+    mean[1] = 4.53125  # one draw of 32 more safe steps outranks any clearance
+    assert _ranked(mean, keys, (least, average))[0] == 1

@@ -89,6 +89,14 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"
         r"[\s\S]*samples=0 +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
     ),
+    "exp_moving_ties.py": (  # the map's own rank is the driver's (ties "map"): it must choose as the driver
+        ["--profile", "quick", "--worlds", "3", "--learned", "6", "--episodes", "3", "--workers", "1"],
+        rf"discs \(ties 'map' driving\) on worlds 0-2 of {TUNING}, moving course, quick profile: \d+ winnable"
+        r"[\s\S]*the map's own rank +\d+  \(0 / 0, p = 1\.000; 0 choices differ\)"
+        r"[\s\S]*the draws' fewest bins, then mean +\d+  \(\d+ / \d+, p = \d\.\d{3}"
+        r"[\s\S]*learned \(6 worlds of collection 6\) +\d+[\s\S]*ties 'draws' \d\.\d{3} \["
+        r"[\s\S]*worlds won only with 'draws': \d+, only with 'map': \d+",
+    ),
     "exp_moving_memory.py": (  # a shadow told nothing is the driver: it must agree at every decision
         ["--profile", "quick", "--worlds", "3", "--workers", "1", "--rules", "lj", "mndlf", "--check"],
         rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"

@@ -219,6 +219,16 @@ class ArrivalsConfig:
     #: standard error, half what a normal error of that spread gives), 0.818 (10 / 20); only the discs
     #: judged standing drawn so, 0.826 (11 / 13); the tracks' ``error_scale`` 0.25, 0.826 (7 / 9)
     speed_sigma: float = 0.05
+    #: how the disc planner breaks ties of the draws' mean safe steps (``TrackingPlanner._decide``): "map",
+    #: by the rank of its map's own velocities (clearance bins, then lateral cost, then the lowest index);
+    #: "draws", by the draws' clearance bins, the fewest over the draws first, then their mean, then as
+    #: "map". Most decisions tie at the top. Judged from the same states (``benchmarks/exp_moving_ties.py``,
+    #: full profile, "map" driving): fatal choices 148 -> 138 on tuning worlds 0-999 (24 / 34) and 438 ->
+    #: 400 on 3,000 worlds of collection 6 (52 / 90, p = 0.002); the draws' mean bins alone, 143 / 407;
+    #: a network trained to break the ties, 148. Episodes on tuning worlds 1,000-2,999, used for nothing
+    #: before: 0.838 with "map", 0.858 with "draws" (worlds won only with it / only with "map": 106 / 67,
+    #: p = 0.004)
+    ties: str = "draws"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
     #: of the tuning set (55 / 44, p = 0.31), at about five times the time per decision

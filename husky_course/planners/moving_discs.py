@@ -8,7 +8,8 @@ the network's disc centre, not a fitted circle), a first sight's by the earlier 
 (:mod:`~husky_course.planners.walls`). :class:`DiscTrackingPlanner` searches it in space-time as the
 tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points, over
 draws of what it doubts: the undecided first sights' walks and the tracked walkers' speeds
-(:class:`~husky_course.config.ArrivalsConfig`'s ``samples`` and ``speed_sigma``).
+(:class:`~husky_course.config.ArrivalsConfig`'s ``samples`` and ``speed_sigma``), its ties going to the
+plan that keeps the most clearance in the worst draw (``ties``).
 The measurements behind each choice are in :mod:`~husky_course.planners.discs`,
 :mod:`~husky_course.planners.arrivals` and :class:`~husky_course.config.WallsConfig`.
 """
@@ -134,6 +135,7 @@ class DiscTrackingPlanner(DiscPlanner):
     name = "discs"
     _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
     _hypothesis, _steps_if = TrackingPlanner._hypothesis, TrackingPlanner._steps_if
+    _keys_if = TrackingPlanner._keys_if
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, grow: float = 0.0,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
@@ -141,12 +143,12 @@ class DiscTrackingPlanner(DiscPlanner):
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
                  speed_sigma: float = ArrivalsConfig.speed_sigma, centres: bool = TrackingConfig.disc_centres,
-                 cutter: PieceCutter | None = None, **kwargs: float) -> None:
+                 cutter: PieceCutter | None = None, ties: str = ArrivalsConfig.ties, **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
             model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres)
         self.map.cutter = cutter
-        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma)
+        _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma, ties)
 
     @property
     def doubtful(self) -> np.ndarray:

@@ -159,6 +159,7 @@ class TrackingPlanner(MappingPlanner):
             rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
             total, base, k = np.zeros(len(keys)), self.velocity, int(tracked.sum())
             drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
+            least, clear = np.full(len(keys), np.inf), np.zeros(len(keys))
             for _ in range(self.samples):
                 speeds = base.copy()
                 if drawn_ones is not None:  # the undecided first sights
@@ -166,7 +167,12 @@ class TrackingPlanner(MappingPlanner):
                     speeds = np.where(drawn_ones, drawn[np.maximum(group, 0)], speeds)
                 if k:
                     speeds[tracked] += rng.normal(0.0, self.speed_sigma, k)
-                total += self._steps_if(horizon, speeds)
+                drawn_keys = self._keys_if(horizon, speeds)
+                total += _steps(drawn_keys)
+                bins = _bins(drawn_keys)
+                least, clear = np.minimum(least, bins), clear + bins
+            if self.ties == "draws":
+                return _ranked(total / self.samples, keys, (least, clear / self.samples))
             return _ranked(total / self.samples, keys)
         doubtful = self.doubtful
         if not doubtful.any():
@@ -197,9 +203,14 @@ class TrackingPlanner(MappingPlanner):
     def _steps_if(self, horizon: int, speeds: np.ndarray) -> np.ndarray:
         """Safe steps of each first primitive's best plan if the map's points walk at ``speeds``
         (one per point of :attr:`points`)."""
+        return _steps(self._keys_if(horizon, speeds))
+
+    def _keys_if(self, horizon: int, speeds: np.ndarray) -> np.ndarray:
+        """Each first primitive's rank (:func:`~husky_course.sim.lattice.rank_plans`' keys) if the
+        map's points walk at ``speeds`` (one per point of :attr:`points`)."""
         self._speeds = speeds
         try:
-            return _steps(MappingPlanner._decide(self, horizon)[1])
+            return MappingPlanner._decide(self, horizon)[1]
         finally:
             self._speeds = None
 
@@ -210,9 +221,24 @@ def _steps(keys: np.ndarray) -> np.ndarray:
     return np.where(keys > -1e8, np.floor((keys + 5e5) / 1e6), 0.0)
 
 
-def _ranked(mean: np.ndarray, keys: np.ndarray) -> tuple[int, np.ndarray]:
-    """The first primitive with the most mean safe steps ``mean`` over draws, ties to ``keys``' rank."""
-    ranked = np.where(keys > -1e8, np.round(mean, 6) * 1e8 + keys, keys)
+def _bins(keys: np.ndarray) -> np.ndarray:
+    """The clearance bins of each first primitive's best plan, read off ``keys`` as :func:`_steps` reads
+    its safe steps (the lateral cost is below 1e3 / 2); -1 where it touches at once."""
+    return np.where(keys > -1e8, np.round((keys - _steps(keys) * 1e6) / 1e3), -1.0)
+
+
+def _ranked(mean: np.ndarray, keys: np.ndarray,
+            clearance: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[int, np.ndarray]:
+    """The first primitive with the most mean safe steps ``mean`` over draws, ties to ``keys``' rank;
+    with ``clearance`` ``(least, mean)`` (the draws' clearance bins: the fewest and the mean over the
+    draws), ties to the most of the fewest, then of the mean, then to ``keys``' rank."""
+    mean, within = np.round(mean, 6), keys
+    if clearance is not None:  # each primitive's place in that order, below 100 (1e-6 of a mean step)
+        last = -np.arange(len(keys))  # full ties to the lowest index, as argmax breaks them
+        order = np.lexsort((last, keys, np.round(clearance[1], 6), clearance[0], mean))  # the last first
+        within = np.empty(len(keys))
+        within[order] = np.arange(len(keys)) * (100.0 / len(keys))
+    ranked = np.where(keys > -1e8, mean * 1e8 + within, keys)
     return int(np.argmax(ranked)), ranked
 
 
@@ -230,8 +256,11 @@ def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
 
 
 def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool,
-               first_samples: int, samples: int, speed_sigma: float) -> None:
+               first_samples: int, samples: int, speed_sigma: float, ties: str = "map") -> None:
     """The settings for what a planner doubts of its map's motion (:class:`ArrivalsConfig`)."""
+    if ties not in ("map", "draws"):
+        raise ValueError(f"ties must be 'map' or 'draws', got {ties!r}")
+    planner.ties = ties
     planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
     for name, value in (("first_samples", first_samples), ("samples", samples)):
         if int(value) != value or value < 0:
