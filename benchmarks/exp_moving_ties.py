@@ -27,31 +27,29 @@ the draws first, then their mean (:func:`~husky_course.planners.tracking._ranked
 3. **Episodes** (``--episodes N``): the planner with each ``ties`` on worlds ``--episodes-start`` onwards
    of the same set: success, and the worlds won only with one.
 
-Measured (full profile; the planner with ``ties="map"`` driving). Same states, fatal choices of 8,924
-winnable decisions on tuning worlds 0-999 / of 26,636 on 3,000 worlds of collection seed 6 (only the
-rule / only the driver, p):
+Measured (full profile; the planner with ``ties="map"`` driving, as it was), fatal choices from the same
+states: ``--worlds 1000 --learned 1000`` (tuning worlds 0-999, 8,924 winnable decisions) and ``--collection
+6 --worlds 3000`` (26,636 winnable decisions); only the rule / only the driver, p:
 
 =========================================  =====================  =====================
 rule among the tied primitives             tuning worlds 0-999    collection 6, 3,000
 =========================================  =====================  =====================
 the map's own rank (the driver)            148                    438
-the draws' mean clearance bins             143 (20 / 25, 0.55)    407 (51 / 82, 0.009)
-the draws' fewest bins, then mean          138 (24 / 34, 0.24)    400 (52 / 90, 0.002)
-learned (3,000 worlds of collection 6)     148 (47 / 47, 1.00)    —
+the draws' mean clearance bins             141 (13 / 20, 0.30)    391 (24 / 71, < 0.001)
+the draws' fewest bins, then mean          136 (17 / 29, 0.10)    384 (25 / 79, < 0.001)
+learned (1,000 worlds of collection 6)     143 (9 / 14, 0.41)     —
 =========================================  =====================  =====================
 
 In 93 of the driver's 148 fatal choices on tuning worlds 0-999 another primitive tied with it at the top
 mean kept a way through; in 69 of those one also tied with it in the map's own safe steps and clearance
 bins (the lateral cost and the index chose). Of the tied primitives, 1.1% lose at the driver's other
-decisions, 63% at its fatal ones. Other rules tried from the same states, on tuning worlds 0-999
-(throwaway prototypes): the most primitives between a choice and the nearest untied one, 180; that
-capped at 2 / 3, 148 / 147; the map's bins smoothed over neighbours, 149-150; the first step's clearance
-to any map point, 163; the map's bins then the draws' fewest, 135 (13 / 26), but 427 (42 / 53) on
-collection 6; ties widened to means within 1 / 2 / 4 draws' share of a step of the top, 139 / 140 / 139
-(400 / 402 / 400 on collection 6). The network, trained on the draws' statistics among others, chose no
-better than the map's rank: what tells a fatal tie apart is not in what it was given, and a rule it
-could have learned (the draws' fewest bins) it did not find in about 2,000 informative decisions (ties
-of winners and losers).
+decisions, 63% at its fatal ones. The rule was chosen among throwaway prototypes on the same recorded
+statistics (tuning worlds 0-999, checked on collection 6), none of which did better: the most primitives
+between a choice and the nearest untied one; the map's clearance bins smoothed over neighbouring
+primitives; the first step's clearance to any map point; the map's bins first, then the draws' fewest;
+ties widened to means within a few draws' share of a step of the top; a mean safe steps plus a share of
+the draws' mean bins. The network (a first prototype trained on 3,000 worlds did no better) was given
+the draws' statistics among its features and still chose worse than the rule it could have learned.
 Episodes: see ``ArrivalsConfig.ties``.
 """
 

@@ -223,11 +223,11 @@ class ArrivalsConfig:
     #: by the rank of its map's own velocities (clearance bins, then lateral cost, then the lowest index);
     #: "draws", by the draws' clearance bins, the fewest over the draws first, then their mean, then as
     #: "map". Most decisions tie at the top. Judged from the same states (``benchmarks/exp_moving_ties.py``,
-    #: full profile, "map" driving): fatal choices 148 -> 138 on tuning worlds 0-999 (24 / 34) and 438 ->
-    #: 400 on 3,000 worlds of collection 6 (52 / 90, p = 0.002); the draws' mean bins alone, 143 / 407;
-    #: a network trained to break the ties, 148. Episodes on tuning worlds 1,000-2,999, used for nothing
-    #: before: 0.838 with "map", 0.858 with "draws" (worlds won only with it / only with "map": 106 / 67,
-    #: p = 0.004)
+    #: full profile, "map" driving): fatal choices 148 -> 136 on tuning worlds 0-999 (17 / 29) and 438 ->
+    #: 384 on 3,000 worlds of collection 6 (25 / 79, p < 0.001); the draws' mean bins alone, 141 / 391; a
+    #: network trained to break the ties (1,000 worlds of collection 6), 143. Episodes on tuning worlds
+    #: 1,000-2,999, used for nothing before: 0.838 with "map", 0.858 with "draws" (worlds won only with it
+    #: / only with "map": 106 / 67, p = 0.004)
     ties: str = "draws"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
