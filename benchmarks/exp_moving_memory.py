@@ -59,7 +59,9 @@ rule                                                    fatal  only rule  only d
 The table is the planner's before it carried the cut network (``planners/cuts.py``). Priced again with
 it (worlds 0-499, 4,523 winnable decisions, 70 fatal choices of the driver, 405 s): ``j`` 68 (12 / 14,
 p = 0.85: a perfect cut adds nothing that can be shown), ``m`` 44 (12 / 38, p < 0.001), ``l`` 57
-(1 / 14, p = 0.001).
+(1 / 14, p = 0.001). The lost by kind, the same worlds and planner (644 s): ``S`` 61 (0 / 9, p = 0.004),
+``N`` 68 (2 / 4), ``L`` 70 (0 / 0), ``B`` 70 (0 / 0): most are still discs dropped at their centre column.
+(Both runs were before the planner broke its draws' ties by their clearance, ``ArrivalsConfig.ties``.)
 
 Of the 51 fatal choices that exact seen cylinders remove beyond every disc's motion (106 to 55), the
 lost cylinders account for 37 (106 to 69); the remembered discs' drift off their cylinders for 3
