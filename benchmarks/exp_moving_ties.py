@@ -194,7 +194,7 @@ def episodes(args: tuple[Profile, list[int], str]) -> list[bool]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
-    parser.add_argument("--worlds", type=int, default=1000)
+    parser.add_argument("--worlds", type=int, default=1000, help="0: episodes only")
     parser.add_argument("--start", type=int, default=0, help="first world of the set's sequence")
     parser.add_argument("--seed", type=int, default=1, help="evaluation set (1: the tuning set)")
     parser.add_argument("--collection", type=int, help="judge on training worlds of this collection instead")
@@ -212,27 +212,28 @@ def main() -> None:
         return [r for p in map_tasks(decisions, parts, workers=args.workers, desc=what, unit="10 worlds")
                 for r in p]
 
-    if args.collection is None:
-        seeds = [int(s) for s in eval_world_seeds(args.start + args.worlds, args.seed)[args.start :]]
-        where = f"worlds {args.start}-{args.start + args.worlds - 1} of evaluation set {args.seed}"
-    else:
-        seeds = [world_seed_for(args.collection, v) for v in range(args.start, args.start + args.worlds)]
-        where = f"worlds {args.start}-{args.start + args.worlds - 1} of collection {args.collection}"
-    rows = gather(seeds, "decisions")
-    driver = sum(not r["win"][r["action"]] for r in rows)
-    print(f"discs (ties {args.driver!r} driving) on {where}, moving course, {args.profile} profile: "
-          f"{len(rows)} winnable decisions, {driver} fatal choices of the driver")
-    print(f"  {'rule among the tied primitives':40s} fatal  (only the rule / only the driver, p)")
-    for i, name in enumerate(RULES):
-        print(judged(rows, np.array([r["choices"][i] for r in rows]), name))
-    if args.learned:
-        train = gather([world_seed_for(args.learned_seed, v) for v in range(args.learned)], "training")
-        net, mu, sd = learn(train, args.learned_seed)
-        with torch.no_grad():
-            score = [net(torch.tensor((r["features"] - mu) / sd)).squeeze(-1).numpy() for r in rows]
-        picks = np.array([int(np.argmax(np.where(r["tied"], s, -np.inf)))
-                          for r, s in zip(rows, score, strict=True)])
-        print(judged(rows, picks, f"learned ({args.learned} worlds of collection {args.learned_seed})"))
+    if args.worlds > 0:  # the same states (0: episodes only)
+        if args.collection is None:
+            seeds = [int(s) for s in eval_world_seeds(args.start + args.worlds, args.seed)[args.start :]]
+            where = f"worlds {args.start}-{args.start + args.worlds - 1} of evaluation set {args.seed}"
+        else:
+            seeds = [world_seed_for(args.collection, v) for v in range(args.start, args.start + args.worlds)]
+            where = f"worlds {args.start}-{args.start + args.worlds - 1} of collection {args.collection}"
+        rows = gather(seeds, "decisions")
+        driver = sum(not r["win"][r["action"]] for r in rows)
+        print(f"discs (ties {args.driver!r} driving) on {where}, moving course, {args.profile} profile: "
+              f"{len(rows)} winnable decisions, {driver} fatal choices of the driver")
+        print(f"  {'rule among the tied primitives':40s} fatal  (only the rule / only the driver, p)")
+        for i, name in enumerate(RULES):
+            print(judged(rows, np.array([r["choices"][i] for r in rows]), name))
+        if args.learned:
+            train = gather([world_seed_for(args.learned_seed, v) for v in range(args.learned)], "training")
+            net, mu, sd = learn(train, args.learned_seed)
+            with torch.no_grad():
+                score = [net(torch.tensor((r["features"] - mu) / sd)).squeeze(-1).numpy() for r in rows]
+            picks = np.array([int(np.argmax(np.where(r["tied"], s, -np.inf)))
+                              for r, s in zip(rows, score, strict=True)])
+            print(judged(rows, picks, f"learned ({args.learned} worlds of collection {args.learned_seed})"))
     if args.episodes:
         worlds = [int(s) for s in eval_world_seeds(args.episodes_start + args.episodes, args.seed)]
         worlds = worlds[args.episodes_start :]
