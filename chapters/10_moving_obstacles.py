@@ -223,8 +223,9 @@ display(Markdown(
 # decisions end in a tie: several primitives survive every version to the horizon. The tie goes to
 # the one whose plan keeps the most clearance in its worst version, then on average over the
 # versions (`ArrivalsConfig.ties`), not to the one its single guess of the motion ranks first:
-# a pass that stays wide whatever the doubted cylinders do (`benchmarks/exp_moving_ties.py`). Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py`
-# measures along the planner's own runs, each belief beside the truth (privileged, an analysis tool).
+# a pass that stays wide whatever the doubted cylinders do (`benchmarks/exp_moving_ties.py`).
+# Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py` measures along the
+# planner's own runs, each belief beside the truth (privileged, an analysis tool).
 # The tracker plans on its map's single guess.
 # Telling such rules apart takes care: a rule that changes many of the planner's choices moves its
 # success on 1,000 worlds by a couple of points either way at random (the search's own tie-break,
