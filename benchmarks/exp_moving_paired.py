@@ -86,9 +86,11 @@ from __future__ import annotations
 import argparse
 import ast
 import os
+import sys
 import time
 from contextlib import nullcontext
 from multiprocessing import Pool
+from pathlib import Path
 
 import numpy as np
 from exp_moving_failures import crossable
@@ -96,6 +98,8 @@ from exp_moving_fatal import survives
 
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.course.diagnosis import sign_test
+from husky_course.data.code import library_fingerprint
+from husky_course.data.io import atomic_save_npz, load_npz, sha256_file
 from husky_course.engines import limit_worker_threads
 from husky_course.evaluation.episodes import eval_world_seeds
 from husky_course.evaluation.rollout import Rollout
@@ -167,33 +171,41 @@ def chunk(args: tuple[Profile, list[int], list[str]]) -> list[dict]:
     return out
 
 
+def made_by() -> str:
+    """What made a saved run's decisions: the library's code and this run's script (a file made by other
+    code is not resumed: its decisions may differ)."""
+    return f"{library_fingerprint()}-{sha256_file(Path(sys.argv[0]))[:12]}"
+
+
 def load_done(path: str, variants: list[str], profile: str) -> dict[int, list]:
     """The worlds an earlier run with ``--save path`` finished, ``{seed: rows}`` (empty when there is no
-    such file); a clear error when it was made with other variants or another profile."""
+    such file); a clear error when it was made with other variants, another profile or other code."""
     if not os.path.exists(path):
         return {}
-    with np.load(path, allow_pickle=False) as f:
-        kept = [str(v) for v in f["variants"]]
-        made = str(f["profile"]) if "profile" in f.files else "?"
-        if kept != variants or made != profile:
-            raise SystemExit(f"{path} holds the variants {kept} of the {made} profile; this run asks for "
-                             f"{variants} of the {profile} profile: name another --save file")
-        seed, driver, fatal, differs = f["seed"], f["driver"], f["fatal"], f["differs"]
-        return {int(w): [(bool(driver[i]), fatal[i].tolist(), differs[i].tolist())
-                         for i in np.flatnonzero(seed == w)] for w in f["worlds"]}
+    f = load_npz(Path(path))
+    kept, made = [str(v) for v in f["variants"]], str(f.get("profile", "?"))
+    if kept != variants or made != profile:
+        raise SystemExit(f"{path} holds the variants {kept} of the {made} profile; this run asks for "
+                         f"{variants} of the {profile} profile: name another --save file")
+    if str(f.get("code", "?")) != made_by():
+        raise SystemExit(f"{path} was made by other code (the library or the script changed since): "
+                         "name another --save file")
+    seed, driver, fatal, differs = f["seed"], f["driver"], f["fatal"], f["differs"]
+    return {int(w): [(bool(driver[i]), fatal[i].tolist(), differs[i].tolist())
+                     for i in np.flatnonzero(seed == w)] for w in f["worlds"]}
 
 
 def save(path: str, variants: list[str], profile: str, worlds: list[dict]) -> None:
-    """Every compared decision of ``worlds`` to ``path`` (written whole, then renamed over it: a run
-    killed while writing leaves the last complete file)."""
+    """Every compared decision of ``worlds`` to ``path``, atomically (a run killed while writing leaves
+    the last complete file)."""
     rows = [r for w in worlds for r in w["rows"]]
-    tmp = f"{path}.partial.npz"
-    np.savez(tmp, variants=np.array(variants, str), profile=np.array(profile), driver=np.array(
-        [r[0] for r in rows], bool), seed=np.array([w["seed"] for w in worlds for _ in w["rows"]], int),
-             fatal=np.array([r[1] for r in rows], bool).reshape(len(rows), len(variants)),
-             differs=np.array([r[2] for r in rows], bool).reshape(len(rows), len(variants)),
-             worlds=np.array([w["seed"] for w in worlds], int))
-    os.replace(tmp, path)
+    atomic_save_npz(Path(path), {
+        "variants": np.array(variants, str), "profile": np.array(profile), "code": np.array(made_by()),
+        "driver": np.array([r[0] for r in rows], bool),
+        "seed": np.array([w["seed"] for w in worlds for _ in w["rows"]], int),
+        "fatal": np.array([r[1] for r in rows], bool).reshape(len(rows), len(variants)),
+        "differs": np.array([r[2] for r in rows], bool).reshape(len(rows), len(variants)),
+        "worlds": np.array([w["seed"] for w in worlds], int)})
 
 
 def main(argv: list[str] | None = None) -> None:

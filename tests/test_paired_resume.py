@@ -45,9 +45,15 @@ def test_a_saved_run_resumes_with_the_same_results(tmp_path: Path) -> None:
         assert len(f["worlds"]) == 3
 
 
-def test_a_saved_run_of_other_variants_is_refused(tmp_path: Path) -> None:
+def test_a_saved_run_of_other_variants_or_code_is_refused(tmp_path: Path) -> None:
     saved = tmp_path / "paired.npz"
     assert paired("--worlds", "1", "--variants", "samples=0", "--save", str(saved)).returncode == 0
     other = paired("--worlds", "1", "--variants", "margin=0.05", "--save", str(saved))
     assert other.returncode != 0
     assert "name another --save file" in other.stderr
+    with np.load(saved, allow_pickle=False) as f:  # the same variants, made by other code
+        arrays = {k: f[k] for k in f.files}
+    np.savez(saved, **{**arrays, "code": np.array("other code")})
+    stale = paired("--worlds", "1", "--variants", "samples=0", "--save", str(saved))
+    assert stale.returncode != 0
+    assert "made by other code" in stale.stderr
