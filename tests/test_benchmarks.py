@@ -140,6 +140,13 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +straight +\d\.\d{{3}} [\s\S]*"
         r"tracking +bouncing, faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
     ),
+    "exp_moving_doubt_memory.py": (  # the map doubting nothing must win exactly the driver's worlds
+        ["--profile", "quick", "--worlds", "3", "--start", "0", "--workers", "1",
+         "--variants", "evidence+posterior+promote", "--check"],
+        rf"discs on worlds 0-2 of {TUNING}, moving course, quick profile\n +as it is +\d\.\d{{3}} \["
+        r"[\s\S]*evidence\+posterior\+promote +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}\n"
+        r" +nothing doubted +\d\.\d{3} \[.*won only with it: 0, only without: 0, p = 1\.000",
+    ),
     "exp_moving_evidence.py": (
         ["--profile", "quick", "--worlds", "3", "--skip", "1"],
         rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +images 0 +\d\.\d{{3}} [\s\S]*"
