@@ -69,7 +69,8 @@ The tables above were measured with the planner before its ties went to the draw
 (``ArrivalsConfig.ties``). With them (worlds 0-999: 8,938 winnable decisions, 144 fatal choices of the
 driver, which crossed 0.835; 18 minutes), a wider clearance cap, which leaves every draw's safe steps as
 they are and so changes only how ties are broken, makes no fewer: 0.4 / 0.5 / 0.7 m, 145 (6 / 5) / 144
-(8 / 8) / 144 (11 / 11).
+(8 / 8) / 144 (11 / 11). Nor does a search margin (the disc planner's is 0; 13 minutes): 0.01 / 0.02 m,
+139 (17 / 22) / 150 (22 / 16).
 
 A privileged shadow prices knowledge the same way: the disc planner told the truth by
 :class:`~husky_course.planners.reference.ToldDiscsPlanner` (worlds 0-999, the same 8,879 decisions and
