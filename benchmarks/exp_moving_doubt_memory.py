@@ -87,6 +87,7 @@ class DoubtingMap(WalkingDiscMap):
         d, cols, pts, pieces = self.pieces(obs)
         discs, cyl, other = self.decode(d, cols, pts, pieces)
         centres = np.where(cyl[:, None] & self.centres, discs[:, :2], np.nan)
+        self.motion.tracks.faces = self.faces
         v = self.motion.update(pts, pieces, centres)
         fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
         speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)

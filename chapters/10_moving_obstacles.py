@@ -210,7 +210,9 @@ display(Markdown(
 # them, in its map and in its search. The tracker's walking points bounce by the same rule, its
 # faces read off the points of its long pieces, so that neither planner holds a reading of the
 # course the other lacks (`benchmarks/exp_moving_walls.py` compares both with walks in a straight
-# line on the tuning set).
+# line on the tuning set). A walker that turned at a wall between two looks leaves a folded line of
+# looks, which a straight line reads as standing; once the faces are known, both planners' tracks
+# unfold it where a fold fits the looks clearly better (`TrackingConfig.bounce_gain`).
 # **What the disc planner doubts.** Its map holds one guess of every motion, and the planner knows
 # two ways in which that guess may be wrong: a first sight the earlier images leave undecided may
 # stand or walk, and a tracked walker's speed comes from a few coarse looks. So at every decision it

@@ -224,3 +224,32 @@ def test_the_disc_maps_tracks_follow_its_network_centres_of_cylinder_pieces_only
         np.testing.assert_allclose(looks, expect)
         looked[centres] = looks
     assert not np.allclose(looked[True], looked[False])
+
+
+def test_tracks_unfold_a_walk_that_bounced_off_a_face_between_looks():
+    """A walker going up at 0.5 m per step that turned at the left face (centre 4.75) between two
+    looks reads as walking down at 0.5, not standing (its straight line is flat); a straight walk,
+    a standing one, and any track while the faces are unknown read as before; a line walking into
+    a face is predicted back off it."""
+    from husky_course.planners.motion import Tracks
+    from husky_course.planners.walls import NO_WALLS, reflected_line
+
+    tracks = Tracks(0.6, 0.45, 0.25, 0.05, 2.1, prior=(0.4, 0.2, 0.6))
+
+    def looks(*y: float) -> np.ndarray:  # ages 3, 2, 1, 0: age, x, y, sigma
+        return np.c_[np.arange(len(y))[::-1], np.full(len(y), 2.0), y, np.full(len(y), 0.05)]
+
+    folded, straight = looks(4.0, 4.5, 4.5, 4.0), looks(3.0, 3.5, 4.0, 4.5)
+    standing = looks(3.0, 3.02, 2.98, 3.0)
+    assert tracks.judged(folded) == 0.0 and abs(Tracks.line(folded)[1]) < 1e-9  # faces unknown: standing
+    tracks.faces = (-5.0, 5.0)
+    y, v = tracks.walk(folded)
+    assert abs(v + 0.5) < 1e-9 and abs(y - 4.0) < 1e-9 and abs(tracks.judged(folded) + 0.5) < 1e-9
+    for track in (straight, standing):  # no fold fits better: the straight line, as before
+        assert np.allclose(tracks.walk(track), Tracks.line(track))
+    assert tracks.judged(standing) == 0.0
+    later = straight + (1.0, 0.0, 0.0, 0.0)  # a step on, its straight line reaches 5.0 ...
+    assert abs(tracks.walk(later)[0] - 4.5) < 1e-9  # ... but turns at the face (4.75): back 0.25
+    s, yy, w = -folded[:, 0], folded[:, 2], np.ones(4)
+    assert reflected_line(s, yy, w, NO_WALLS, 0.25, 0.5, 4.0) is None
+    assert reflected_line(s[:2], yy[:2], w[:2], (-5.0, 5.0), 0.25, 0.5, 4.0) is None  # two looks: no fold

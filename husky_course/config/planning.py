@@ -98,6 +98,14 @@ class TrackingConfig:
     #: 0.088, standing ones read walking rose from 0.030 to 0.051 (only where the track reads a walk:
     #: 0.112 / 0.020); the planner crossed 0.833 / 0.829 (35 / 30, 26 / 25): better speeds, the same worlds
     disc_centres: bool = True
+    #: a track whose looks fold at a side wall's face (a walker that bounced between two looks, whose
+    #: straight line is flat) is unfolded where the fold lowers its weighted squared residual by more
+    #: than this (:func:`~husky_course.planners.walls.reflected_line`; ``None``: never); both planners.
+    #: Our first value, not swept. Full profile, tuning worlds 1,000-2,999 / 3,000-4,999 (the second slice
+    #: used for nothing before), episodes: the disc planner 0.858 -> 0.861 / 0.832 -> 0.837 (worlds won
+    #: only with / only without: 8 / 2, 10 / 1; pooled 18 / 3, p = 0.001), the tracker 0.754 -> 0.760 /
+    #: 0.732 -> 0.738 (14 / 2, 14 / 2; p < 0.001). It unfolds about one line in a hundred with faces known
+    bounce_gain: float | None = 4.0
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,8 @@ current frame by dead reckoning, and compares them with the current scan.
   last four looks (a far cylinder, hit by one or two columns, is placed only to about a column's
   width; a near one to centimetres), judged against the course's motion model (a cylinder stands
   or walks at a speed in the world's ``speed_range``: a slope within its error of 0 reads as
-  standing, and a walk is clipped into the range). A piece seen for the first time has no
+  standing, and a walk is clipped into the range; a line of looks that folds where a walker turned
+  at a side wall between two of them is unfolded, :mod:`.walls`). A piece seen for the first time has no
   velocity yet: it is taken as standing and marked *seen once*;
 * :class:`MotionMemory` keeps the tracks between decisions;
 * :class:`WalkingMap` is the mapping planner's map (:class:`~husky_course.planners.perception.EgoMap`)
@@ -39,7 +40,7 @@ import numpy as np
 from ..config import ArrivalsConfig, SimConfig, TrackingConfig, WallsConfig
 from .arrivals import Arrivals
 from .perception import DepthScan, EgoMap
-from .walls import NO_WALLS, walk_on, wall_faces
+from .walls import NO_WALLS, bounced, reflected_line, walk_on, wall_faces
 
 
 def segments(points: np.ndarray, gap: float = 0.3, spacing: float = 0.0) -> list[np.ndarray]:
@@ -112,6 +113,10 @@ class Tracks:
     the line's slope is *judged* (:meth:`judged`): a cylinder either stands or walks at a speed in
     that range, so a slope its standard error cannot tell from 0 as well as from a walk is read
     as standing, and a walk is clipped into the range.
+
+    A walker that bounced off a side wall between two looks folds its line; with the walls' faces
+    known (:attr:`faces`, set by the map before each image), :meth:`walk` unfolds it
+    (:func:`~.walls.reflected_line`, ``bounce_gain``) where a fold fits the looks better.
     """
 
     def __init__(
@@ -119,9 +124,11 @@ class Tracks:
         looks: int = TrackingConfig.looks, keep: int = TrackingConfig.keep, gate: float = TrackingConfig.gate,
         x_gate: float = TrackingConfig.x_gate, prior: tuple[float, float, float] | None = None,
         error_scale: float = TrackingConfig.error_scale,
+        bounce_gain: float | None = TrackingConfig.bounce_gain,
     ) -> None:
         self.max_step, self.camera_x, self.radius = max_step, camera_x, radius
-        self.prior, self.error_scale = prior, error_scale
+        self.prior, self.error_scale, self.bounce_gain = prior, error_scale, bounce_gain
+        self.faces = NO_WALLS  #: the side walls' faces (robot frame), as the map reads them (:mod:`.walls`)
         self.column = column  # the tangent step between two columns
         self.half_tangent = half_tangent  # the tangent of half the field of view
         self.looks, self.keep, self.gate, self.x_gate = looks, keep, gate, x_gate
@@ -148,8 +155,22 @@ class Tracks:
         v = float(np.sum(w * (s - sm) * (y - ym)) / np.sum(w * (s - sm) ** 2))
         return ym - v * sm, v
 
+    def walk(self, track: np.ndarray) -> tuple[float, float]:
+        """``(y now, velocity)`` of a track as the walls shape it: with :attr:`faces` known and
+        ``bounce_gain`` set, the line of looks folded where a bounce between two of them fits better
+        (:func:`~.walls.reflected_line`), else :meth:`line`; ``y now`` is where that walk takes the last
+        look, bouncing (:func:`~.walls.bounced`)."""
+        if len(track) < 2:
+            return self.line(track)
+        s, y, w = -track[:, 0], track[:, 2], 1.0 / track[:, 3] ** 2
+        fold = None
+        if self.bounce_gain is not None:
+            fold = reflected_line(s, y, w, self.faces, self.radius, self.error_scale, self.bounce_gain)
+        a, v = self.line(track) if fold is None else fold
+        return float(bounced(a + v * s[-1], v, -s[-1], self.radius, self.faces)), float(v)
+
     def judged(self, track: np.ndarray) -> float:
-        """A track's velocity (m per step): its line's slope, judged against :attr:`prior` if set.
+        """A track's velocity (m per step): its walk's slope (:meth:`walk`), judged against :attr:`prior`.
 
         The slope ``v`` has standard error ``se = error_scale / sqrt(sum w (s - s_mean)^2)`` (weights
         ``1 / sigma^2``). Standing (probability ``1 - fraction``) predicts ``v ~ N(0, se^2)``;
@@ -162,7 +183,7 @@ class Tracks:
         success on 200 tuning worlds 0.680 unjudged, 0.690 / 0.705 / 0.705 / 0.710 with scale 1 / 0.7 / 0.5 /
         0.3 (``benchmarks/exp_moving_tracker.py`` prints the tracker's success as the course has it).
         """
-        v = self.line(track)[1]
+        v = self.walk(track)[1]
         if self.prior is None or len(track) < 2:
             return v
         fraction, slowest, fastest = self.prior
@@ -208,7 +229,7 @@ class Tracks:
             seen[:, :2] = np.where(np.isfinite(told), told, seen[:, :2])
         cost = np.full((len(pieces), len(self.tracks)), np.inf)
         for k, t in enumerate(self.tracks):
-            y = self.line(t)[0]
+            y = self.walk(t)[0]
             x = np.average(t[:, 1], weights=1.0 / t[:, 3] ** 2)
             reach = self.gate if len(t) > 1 else self.max_step * t[-1, 0] + 0.1
             reach = reach + 2 * seen[:, 2]
@@ -340,6 +361,7 @@ class WalkingMap:
     def add(self, obs: np.ndarray) -> np.ndarray:
         """Merge the scan of ``obs``; return its points' velocities (they come first in :attr:`points`)."""
         now = self.map.scan(obs)
+        self.motion.tracks.faces = self.faces  # its tracks fold a walk that bounced off them
         v = self.motion.update(now)
         m, wall = self.motion, np.zeros(len(now), bool)
         group, rows = np.full(len(now), -1), []

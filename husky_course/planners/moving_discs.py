@@ -86,6 +86,7 @@ class WalkingDiscMap(DiscMap):
         d, cols, pts, pieces = self.pieces(obs)
         discs, cyl, other = self.decode(d, cols, pts, pieces)
         centres = np.where(cyl[:, None] & self.centres, discs[:, :2], np.nan)  # the tracks' sightings
+        self.motion.tracks.faces = self.faces  # its tracks fold a walk that bounced off them
         v = self.motion.update(pts, pieces, centres)
         fresh = self.motion.tracks.fresh if len(pts) else np.zeros(0, bool)
         speed = np.array([v[i].mean() for i in pieces]) if pieces else np.empty(0)

@@ -64,3 +64,36 @@ def walk_on(discs: np.ndarray, v: np.ndarray, faces: tuple[float, float]) -> tup
     y, r = discs[:, 1], discs[:, 2]
     after = bounced(y, v, 1.0, r, faces)
     return after, np.where(v == 0, v, np.sign(bounced(y, v, 1.001, r, faces) - after) * np.abs(v))
+
+
+def reflected_line(s: np.ndarray, y: np.ndarray, w: np.ndarray, faces: tuple[float, float], radius: float,
+                   scale: float, gain: float) -> tuple[float, float] | None:
+    """``(y at s = 0, velocity)`` of a cylinder's looks ``(s, y)`` (times ``s <= 0`` in steps, weights ``w``)
+    read as a walk that bounced off a face between two looks, or ``None`` when no bounce fits better.
+
+    A bounce folds a straight walk (:func:`bounced`): the looks before it, reflected about the face
+    (less ``radius``, where the centre turns), lie on one line with the looks after it. Each face and
+    each gap between looks is tried; a fold counts only where the unfolded line crosses the face within
+    that gap (a quarter step either side) and walks away from it afterwards, and only where its
+    weighted squared residual (over ``scale**2``, the sightings' error as :class:`~.motion.Tracks`
+    judges it) is lower than the straight line's by more than ``gain``. ``y at s = 0`` is the unfolded
+    line's, the velocity its slope (the walk after the last bounce). Three looks at least, both faces known.
+    """
+    if len(s) < 3 or not (np.isfinite(faces[0]) and np.isfinite(faces[1])):
+        return None
+
+    def fit(values: np.ndarray) -> tuple[float, float, float]:
+        sm, ym = np.average(s, weights=w), np.average(values, weights=w)
+        b = float(np.sum(w * (s - sm) * (values - ym)) / np.sum(w * (s - sm) ** 2))
+        a = float(ym - b * sm)
+        return a, b, float(np.sum(w * (values - a - b * s) ** 2)) / scale**2
+
+    best, found = fit(y)[2] - gain, None
+    for turn, away in ((faces[1] - radius, -1.0), (faces[0] + radius, 1.0)):
+        for k in range(1, len(s)):
+            a, b, chi = fit(np.r_[2 * turn - y[:k], y[k:]])
+            if chi >= best or b * away <= 0:
+                continue
+            if s[k - 1] - 0.25 <= (turn - a) / b <= s[k] + 0.25:
+                best, found = chi, (a, b)
+    return found
