@@ -140,6 +140,11 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +straight +\d\.\d{{3}} [\s\S]*"
         r"tracking +bouncing, faces told +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
     ),
+    "exp_moving_fold.py": (
+        ["--profile", "quick", "--worlds", "3", "--skip", "1", "--workers", "1"],
+        rf"3 moving worlds of {TUNING} \(after its first 1\)[\s\S]*discs +straight +\d\.\d{{3}} [\s\S]*"
+        r"tracking +folded +\d\.\d{3} .*only without: \d+, p = \d\.\d\d",
+    ),
     "exp_moving_doubt_memory.py": (  # the map doubting nothing must win exactly the driver's worlds
         ["--profile", "quick", "--worlds", "3", "--start", "0", "--workers", "1",
          "--variants", "evidence+posterior+promote", "--check"],

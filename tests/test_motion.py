@@ -250,6 +250,8 @@ def test_tracks_unfold_a_walk_that_bounced_off_a_face_between_looks():
     assert tracks.judged(standing) == 0.0
     later = straight + (1.0, 0.0, 0.0, 0.0)  # a step on, its straight line reaches 5.0 ...
     assert abs(tracks.walk(later)[0] - 4.5) < 1e-9  # ... but turns at the face (4.75): back 0.25
+    tracks.bounce_gain = None  # off: every line straight, as before the fold
+    assert tracks.walk(folded) == Tracks.line(folded) and tracks.walk(later) == Tracks.line(later)
     s, yy, w = -folded[:, 0], folded[:, 2], np.ones(4)
     assert reflected_line(s, yy, w, NO_WALLS, 0.25, 0.5, 4.0) is None
     assert reflected_line(s[:2], yy[:2], w[:2], (-5.0, 5.0), 0.25, 0.5, 4.0) is None  # two looks: no fold

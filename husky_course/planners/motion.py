@@ -159,13 +159,11 @@ class Tracks:
         """``(y now, velocity)`` of a track as the walls shape it: with :attr:`faces` known and
         ``bounce_gain`` set, the line of looks folded where a bounce between two of them fits better
         (:func:`~.walls.reflected_line`), else :meth:`line`; ``y now`` is where that walk takes the last
-        look, bouncing (:func:`~.walls.bounced`)."""
-        if len(track) < 2:
+        look, bouncing (:func:`~.walls.bounced`). ``bounce_gain`` None: :meth:`line`, as before the fold."""
+        if len(track) < 2 or self.bounce_gain is None:
             return self.line(track)
         s, y, w = -track[:, 0], track[:, 2], 1.0 / track[:, 3] ** 2
-        fold = None
-        if self.bounce_gain is not None:
-            fold = reflected_line(s, y, w, self.faces, self.radius, self.error_scale, self.bounce_gain)
+        fold = reflected_line(s, y, w, self.faces, self.radius, self.error_scale, self.bounce_gain)
         a, v = self.line(track) if fold is None else fold
         return float(bounced(a + v * s[-1], v, -s[-1], self.radius, self.faces)), float(v)
 
