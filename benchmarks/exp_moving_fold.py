@@ -13,9 +13,10 @@ over its first worlds): ``straight`` (``bounce_gain`` None: every line straight,
 before the fold) and ``folded`` (the planner as it is). Each line gives the success rate with its
 exact 95% interval and, for ``folded``, the worlds won only with it / only without.
 
-Measured (full profile): worlds 1,000-2,999 (``--skip 1000 --worlds 2000``), the disc planner 0.858 ->
-0.861 (8 / 2), the tracker 0.754 -> 0.760 (14 / 2); worlds 3,000-4,999, used for nothing before,
-0.832 -> 0.837 (10 / 1) and 0.732 -> 0.738 (14 / 2). Pooled: 18 / 3 (p = 0.001) and 28 / 4 (p < 0.001).
+Measured (full profile; throwaway runs of the same two variants): worlds 1,000-2,999 (``--skip 1000
+--worlds 2000``), the disc planner 0.858 -> 0.861 (8 / 2), the tracker 0.759 -> 0.760 (7 / 4); worlds
+3,000-4,999, used for nothing before, 0.832 -> 0.837 (10 / 1) and 0.736 -> 0.738 (6 / 3). Pooled: the
+disc planner 18 / 3 (p = 0.001), the tracker 13 / 7 (p = 0.26, no gain shown).
 """
 
 from __future__ import annotations

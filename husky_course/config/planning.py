@@ -103,8 +103,11 @@ class TrackingConfig:
     #: than this (:func:`~husky_course.planners.walls.reflected_line`; ``None``: never); both planners.
     #: Our first value, not swept. Full profile, tuning worlds 1,000-2,999 / 3,000-4,999 (the second slice
     #: used for nothing before), episodes: the disc planner 0.858 -> 0.861 / 0.832 -> 0.837 (worlds won
-    #: only with / only without: 8 / 2, 10 / 1; pooled 18 / 3, p = 0.001), the tracker 0.754 -> 0.760 /
-    #: 0.732 -> 0.738 (14 / 2, 14 / 2; p < 0.001). It unfolds about one line in a hundred with faces known
+    #: only with / only without: 8 / 2, 10 / 1; pooled 18 / 3, p = 0.001), the tracker 0.759 -> 0.760 /
+    #: 0.736 -> 0.738 (7 / 4, 6 / 3; pooled 13 / 7, p = 0.26: no gain shown; it folds too, so that neither
+    #: planner holds a reading the other lacks). ``benchmarks/exp_moving_fold.py`` runs both side by side.
+    #: A prototype that bounced only the predictions new pieces are gated against, without the fold, took
+    #: the tracker to 0.754 / 0.732. The fold takes about one line in a hundred with the faces known
     bounce_gain: float | None = 4.0
 
 
