@@ -8,7 +8,7 @@ All on the tuning set (evaluation set 1) of the moving course, nothing trained.
    estimated lateral velocity from the previous scan; the truth is the displacement over that step
    of the cylinder the point lies on. Printed for moving and standing cylinders, three estimators:
    two images compared, each piece located by the mean of its points (the course's first
-   estimator) or by the fitted circle of :func:`husky_course.planners.motion.piece_centre` (with
+   estimator) or by the fitted circle of :func:`husky_course.planners.pieces.piece_centre` (with
    second-look averaging), and the tracks of :class:`husky_course.planners.motion.Tracks` (fitted
    circles followed over four looks, a weighted line through them), the one the planners use.
 2. **What it is worth.** The mapping planner with motion (:mod:`husky_course.planners.tracking`)
@@ -30,9 +30,10 @@ from husky_course.config import get_profile, with_world
 from husky_course.evaluation.episodes import eval_world_seeds, evaluate
 from husky_course.planners.base import episode_start
 from husky_course.planners.mapping import MappingPlanner
-from husky_course.planners.motion import MotionMemory, piece_centre, segments
+from husky_course.planners.motion import MotionMemory
 from husky_course.planners.oracle import OraclePlanner
 from husky_course.planners.perception import DepthScan
+from husky_course.planners.pieces import piece_centre, segments
 from husky_course.planners.reference import SecondLookPlanner, SeenMotionPlanner
 from husky_course.planners.tracking import TrackingPlanner
 from husky_course.sim.fast import FastSimulator

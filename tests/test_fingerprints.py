@@ -117,6 +117,20 @@ def test_closure_follows_relative_and_absolute_imports():
         code.code_fingerprint("husky_course.no_such_module")
 
 
+def test_the_piece_networks_never_read_how_tracks_follow_pieces():
+    """The disc and cut networks read the scan's pieces (planners/pieces.py), never the tracks of the
+    moving course (planners/motion.py): an edit of tracking retrains neither, where the memory students,
+    which read the tracks' velocities, do retrain."""
+    from husky_course.training import cuts
+
+    for made_by in (discs.DISCS_CODE, cuts.CUTS_CODE):
+        found = set(code.closure(*made_by))
+        assert "husky_course.planners.pieces" in found
+        assert not found & {"husky_course.planners.motion", "husky_course.planners.walls",
+                            "husky_course.planners.arrivals"}
+    assert "husky_course.planners.motion" in code.closure(*memory.MEMORY_CODE)
+
+
 def _make(tmp_path: Path, fingerprint: str, profile: str = "quick") -> str:
     if shutil.which("make") is None:
         pytest.skip("make is not installed")

@@ -36,7 +36,7 @@ def _arc(centre: tuple[float, float], radius: float) -> np.ndarray:
 def test_piece_centre_locates_a_cylinder():
     """The fitted circle finds a cylinder's centre from the few columns that hit it (the points'
     mean is pulled towards the camera and jumps as the columns change)."""
-    from husky_course.planners.motion import piece_centre
+    from husky_course.planners.pieces import piece_centre
 
     for cx, cy, r in [(2.0, 0.3, 0.2), (3.0, -0.8, 0.3), (3.0, 1.2, 0.25), (1.6, -1.0, 0.35)]:
         pts = _arc((cx, cy), r)
@@ -53,7 +53,8 @@ def test_lateral_velocities_from_two_scans():
     within one step's walk at 0; a second look averages with the first. The two-image estimator
     lives in the benchmark that compares it (``benchmarks/exp_moving_tracker.py``); the memory is the
     library's."""
-    from husky_course.planners.motion import MotionMemory, segments
+    from husky_course.planners.motion import MotionMemory
+    from husky_course.planners.pieces import segments
 
     lateral_velocities = _benchmark("exp_moving_tracker").lateral_velocities
 
@@ -102,7 +103,7 @@ def test_walking_map_points_walk_on():
 def test_segments_cut_two_cylinders_side_by_side():
     """Two touching cylinders give one run of close points; the peak of forward distance where
     their arcs meet cuts it in two. A wall along the course has no such peak and stays whole."""
-    from husky_course.planners.motion import segments
+    from husky_course.planners.pieces import segments
 
     left, right = _arc((1.6, 0.3), 0.3), _arc((1.6, -0.3), 0.3)
     assert np.hypot(*(left[-1] - right[0])) < 0.3  # close enough to be one piece by distance alone
@@ -169,7 +170,8 @@ def test_tracks_locate_a_piece_by_the_centre_they_are_given():
     """Given a centre per piece (the disc planner's network), a track's looks are those centres, not
     the fitted circle's: a standing cylinder whose given centres walk 0.4 m per step reads as walking;
     a ``nan`` centre leaves the fit, and without centres it stands."""
-    from husky_course.planners.motion import MotionMemory, piece_centre
+    from husky_course.planners.motion import MotionMemory
+    from husky_course.planners.pieces import piece_centre
 
     told, fitted, partly = MotionMemory(MOVING.sim), MotionMemory(MOVING.sim), MotionMemory(MOVING.sim)
     for k in range(3):
@@ -193,8 +195,8 @@ def test_the_disc_maps_tracks_follow_its_network_centres_of_cylinder_pieces_only
 
     from husky_course.config import TrackingConfig
     from husky_course.models.discs import DiscNet
-    from husky_course.planners.motion import piece_centre
     from husky_course.planners.moving_discs import DiscTrackingPlanner
+    from husky_course.planners.pieces import piece_centre
 
     assert TrackingConfig.disc_centres
     sim = FastSimulator(MOVING.sim)

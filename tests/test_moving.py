@@ -241,7 +241,7 @@ def test_exercise_checks():
         exercises.check_mover_position(5, MOVING.sim, still, 3.5, 0.0)
     assert exercises.check_sample_time(4, 25, 101, 4.25)
     arc, r = exercises.cylinder_arc(3, MOVING.sim)
-    from husky_course.planners.motion import piece_centre
+    from husky_course.planners.pieces import piece_centre
 
     found = piece_centre(arc, MOVING.sim.camera.mount_forward, r)  # the radius known: the fit is exact
     assert exercises.check_arc_centre(arc, r, found, MOVING.sim)

@@ -1,7 +1,7 @@
 """The cut network: where one piece of surface joins two cylinders.
 
 The planner's scan is cut into pieces of surface where the columns' points jump by more than 0.3 m
-or two arcs meet at a peak (:func:`~husky_course.planners.motion.segments`). A cylinder standing
+or two arcs meet at a peak (:func:`~husky_course.planners.pieces.segments`). A cylinder standing
 beside another, or partly behind it, often stays joined to it in one piece: the depth step where
 their surfaces meet is no larger than the steps within one cylinder's arc at the same range. The
 disc network (:mod:`.discs`) then reads one disc for the two, and the map loses the other one.

@@ -1,6 +1,6 @@
 """Pieces cut again where the cut network says two cylinders meet (chapters 8 and 10).
 
-The tracker's cut (:func:`~husky_course.planners.motion.segments`: gaps of 0.3 m, two arcs' peak)
+The tracker's cut (:func:`~husky_course.planners.pieces.segments`: gaps of 0.3 m, two arcs' peak)
 leaves a cylinder standing beside another, or partly behind it, joined to it in one piece; the disc
 network then reads one disc for the two, and the map loses the other. In random views of training
 worlds, 7% of the pieces that hit a cylinder join two, and the depth step where they meet is no

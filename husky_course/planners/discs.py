@@ -12,7 +12,7 @@ perception, a reference and not a bound).
 This planner learns that step. Every image:
 
 1. the scan (:class:`~husky_course.planners.perception.DepthScan`) is cut into pieces of surface
-   (:func:`~husky_course.planners.motion.segments`, the tracker's own cut);
+   (:func:`~husky_course.planners.pieces.segments`, the tracker's own cut);
 2. each piece goes through :class:`~husky_course.models.discs.DiscNet` (its features:
    :meth:`PieceReader.features`), which says whether it belongs to a cylinder and, if so, where the
    cylinder's centre is and how large it is;
@@ -59,8 +59,8 @@ from ..models.base import NumpyMLP
 from ..models.discs import PIECE_GLOBALS, PIECE_POINTS, DiscNet
 from .cuts import PieceCutter
 from .mapping import MappingPlanner
-from .motion import segments
 from .perception import DepthScan, EgoMap
+from .pieces import segments
 
 
 class PieceReader:
