@@ -238,7 +238,12 @@ class ArrivalsConfig:
     #: 384 on 3,000 worlds of collection 6 (25 / 79, p < 0.001); the draws' mean bins alone, 141 / 391; a
     #: network trained to break the ties (1,000 worlds of collection 6), 143. Episodes on tuning worlds
     #: 1,000-2,999, used for nothing before: 0.838 with "map", 0.858 with "draws" (worlds won only with it
-    #: / only with "map": 106 / 67, p = 0.004)
+    #: / only with "map": 106 / 67, p = 0.004). Later prototypes, episodes on tuning worlds 1,000-1,999
+    #: against "draws" (0.846; won only with / only without): ties first to the first primitive after
+    #: which one continuation (some draw's best) survives the most steps on average over every draw (a
+    #: plan committed to, not re-chosen per draw), 0.825 (33 / 54); to the fewest such steps, 0.787
+    #: (44 / 103); an edge through space none of the last three images saw free counting as at most
+    #: 0.1 / 0 m of clearance (the robot's centre line and its sides), 0.844 (38 / 40) / 0.821 (42 / 67)
     ties: str = "draws"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
