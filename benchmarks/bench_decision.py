@@ -10,8 +10,10 @@ decision of the distilled planner, the memory student, the mapping planner and t
 by side, along a real episode's images (the memory planners' maps grow as they go), on
 ``--episodes`` worlds of the tuning set (evaluation set ``EvalPlan.tuning_seed``). Uses trained
 checkpoints if the profile has them, otherwise seeded untrained models (same cost; the disc planner
-is left out without its trained network). Last, the mapping planner's search two ways at every
+is left out without its trained network). Then the mapping planner's search two ways at every
 decision of those episodes: its path tables against the clearance grid read at 21 samples per edge.
+Last, the moving disc planner's decision two ways at every decision of as many moving-course
+episodes: its draws sharing the standing points' clearances against each draw computing its own.
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ def main() -> None:
         )
     decisions(get_profile(args.profile), args.episodes)
     searches(get_profile(args.profile), args.episodes)
+    draws(get_profile(args.profile), args.episodes)
 
 
 def decisions(profile, episodes: int = 20) -> None:
@@ -131,6 +134,46 @@ def searches(profile, episodes: int = 20) -> None:
     table, grid = (1e3 * float(np.mean(t)) for t in zip(*times, strict=True))
     print(f"the mapping planner's search, {len(times)} decisions: path tables {table:.2f} ms, "
           f"clearance grid {grid:.2f} ms: {grid / table:.1f}x")
+
+
+def draws(profile, episodes: int = 20) -> None:
+    """The moving disc planner's decisions along ``episodes`` tuning episodes of the moving course, two
+    ways side by side at every decision: its draws sharing the standing points' clearances (each lattice
+    state's row computed once per decision, ``TrackingPlanner._start_check``) against each draw computing
+    its own; the same choice and keys both ways, bit for bit."""
+    import time
+
+    from husky_course.config import with_world
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.registry import make_planner
+    from husky_course.sim.fast import FastSimulator
+
+    moving = with_world(profile, "moving")
+    try:  # chapter 10's disc planner: the disc network of ``profile``, on the moving course
+        planner = make_planner("discs", profile=profile, config=moving.sim)
+    except Exception as exc:  # noqa: BLE001
+        print(f"(no moving disc planner: {exc})")
+        return
+    decide, times = planner._decide, []
+
+    def both(horizon: int) -> tuple[int, np.ndarray]:
+        t0 = time.perf_counter()
+        choice, keys = decide(horizon)  # shares them (and drops them when it returns)
+        t1 = time.perf_counter()
+        alone = planner._decide_over_draws(horizon)  # the same draws, each computing its own
+        times.append((t1 - t0, time.perf_counter() - t1))
+        if alone[0] != choice or not np.array_equal(alone[1], keys):
+            raise AssertionError("sharing the standing clearances changed a decision")
+        return choice, keys
+
+    planner._decide = both
+    sim = FastSimulator(moving.sim)
+    with single_thread():
+        for s in eval_world_seeds(episodes, profile.eval.tuning_seed):
+            run_episode(planner, sim, int(s))
+    shared, alone = (1e3 * float(np.mean(t)) for t in zip(*times, strict=True))
+    print(f"the moving disc planner's decision, {len(times)} decisions: draws sharing the standing "
+          f"clearances {shared:.2f} ms, each draw its own {alone:.2f} ms: {alone / shared:.2f}x (same keys)")
 
 
 if __name__ == "__main__":

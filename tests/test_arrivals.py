@@ -313,6 +313,37 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
         make_planner("discs", config=profile.sim, profile=profile, ties="clearance")
 
 
+def test_the_draws_of_a_decision_share_the_standing_clearances_and_change_no_bit():
+    """Within one decision the draws read the standing points' clearances each state's row computed
+    once (``TrackingPlanner._start_check``). Every draw's keys equal, bit for bit, those of the same
+    draw with nothing shared, and rows are shared (the cache is used)."""
+    from husky_course.config import get_profile, with_world
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.registry import make_planner
+    from husky_course.sim.fast import FastSimulator
+
+    profile = with_world(get_profile("quick"), "moving")
+    sim = FastSimulator(profile.sim)
+    planner = make_planner("discs", config=profile.sim, profile=profile, samples=6)
+    keys_if, same, shared = planner._keys_if, [], []
+
+    def compared(horizon: int, speeds: np.ndarray) -> np.ndarray:
+        keys = keys_if(horizon, speeds)
+        rows, planner._standing_rows = planner._standing_rows, None
+        try:
+            same.append(np.array_equal(keys, keys_if(horizon, speeds)))
+        finally:
+            planner._standing_rows = rows
+        shared.append(sum(len(ys) for by_x in rows.values() for ys, _ in by_x.values()))
+        return keys
+
+    planner._keys_if = compared
+    for seed in eval_world_seeds(4, 1):
+        run_episode(planner, sim, int(seed))
+    assert len(same) > 20 and all(same)
+    assert max(shared) > 0 and planner._standing_rows is None  # used within a decision, dropped after
+
+
 def test_ties_of_the_draws_mean_go_to_the_most_clearance_in_the_worst_draw_then_on_average():
     """``_ranked``: the most mean safe steps first, whatever the clearance; among equals, the most
     clearance bins in the worst draw, then the most on average, then the map's own rank, then the

@@ -172,8 +172,10 @@ def test_the_space_time_check_counts_every_walker_within_reach_and_skips_only_th
         if not x0 + x.min() - reach < px < x0 + x.max() + reach:
             continue
         walk = bounced(py, v, t0 + t, r, disc_map.faces)
-        d = np.hypot(x0 + x - px, y0[:, None, None] + ly[None] - walk) - r
-        gap = np.minimum(gap, d.min(-1))
+        dx, dy = x0 + x - px, y0[:, None, None] + ly[None] - walk
+        d = np.sqrt((dx**2 + dy**2).min(-1)) - r  # the check's own arithmetic: the skip must change no bit
+        np.testing.assert_allclose(d, (np.hypot(dx, dy) - r).min(-1), rtol=0, atol=1e-12)  # the distance
+        gap = np.minimum(gap, d)
     expected = gap - planner.radius - planner.margin
     np.testing.assert_array_equal(clear, expected)
     np.testing.assert_array_equal(hit, expected < 0)

@@ -139,6 +139,7 @@ class DiscTrackingPlanner(DiscPlanner):
 
     name = "discs"
     _start_check, _decide = TrackingPlanner._start_check, TrackingPlanner._decide
+    _decide_over_draws = TrackingPlanner._decide_over_draws
     _hypothesis, _steps_if = TrackingPlanner._hypothesis, TrackingPlanner._steps_if
     _keys_if = TrackingPlanner._keys_if
 

@@ -88,32 +88,71 @@ class TrackingPlanner(MappingPlanner):
         points, reach = self.points, self._reach
         standing = points[~walking]
         table = self._table_for(standing)
+        rows = getattr(self, "_standing_rows", None)  # within one decision: its draws share these
+        cached = None if rows is None else rows.setdefault(walking.tobytes(), {})
         movers = np.column_stack([points[walking], speeds[walking]])  # rows (x, y, r, v)
         doubt = points[self.doubtful] if self.doubt_steps > 0 and self.max_walk > 0 else np.empty((0, 3))
         local = self._library.local_paths  # type: ignore[union-attr]
         every = max(1, (local.shape[1] - 1) // (self.path_samples - 1))
         x, t = local[:, ::every, 0], sample_times(0.0, local.shape[1])[::every]  # relative to an edge's start
         ahead = (x.min() - reach, x.max() + reach)
+        side = (local[:, ::every, 1].min(), local[:, ::every, 1].max())  # the samples' lateral extent
         faces = getattr(self.map, "faces", NO_WALLS)  # the walls' faces as its map reads them
 
         def near(p: np.ndarray, x0: float) -> np.ndarray:
             return p[(p[:, 0] > x0 + ahead[0]) & (p[:, 0] < x0 + ahead[1])]
 
+        def standing_gap(x0: float, y0: np.ndarray) -> np.ndarray:
+            """``table.clearance`` of the standing points, each state's row computed once per decision
+            (a row depends on its own start alone: the same numbers as computing them all)."""
+            if cached is None or not len(y0):
+                return table.clearance(standing, x0, y0, reach)
+            known = cached.get(x0)
+            if known is None or not len(known[0]):
+                gap = table.clearance(standing, x0, y0, reach)
+                order = np.argsort(y0)
+                cached[x0] = (y0[order], gap[order])
+                return gap
+            ys, gaps = known
+            at = np.minimum(np.searchsorted(ys, y0), len(ys) - 1)
+            found = ys[at] == y0
+            if found.all():
+                return gaps[at]
+            gap = np.empty((len(y0), gaps.shape[1]))
+            gap[found] = gaps[at[found]]
+            gap[~found] = table.clearance(standing, x0, y0[~found], reach)
+            ys, gaps = np.r_[ys, y0[~found]], np.r_[gaps, gap[~found]]
+            order = np.argsort(ys)
+            cached[x0] = (ys[order], gaps[order])
+            return gap
+
         def check(x0: float, y0: np.ndarray, t0: float) -> tuple[np.ndarray, np.ndarray]:
-            gap = table.clearance(standing, x0, y0, reach)  # (states, n), capped at reach
+            gap = standing_gap(x0, y0)  # (states, n), capped at reach
             moving, doubted = near(movers, x0), near(doubt, x0)
             if len(moving) or len(doubted):
                 X, Y, T = x0 + x, y0[:, None, None] + local[None, :, ::every, 1], t0 + t
             if len(moving):  # the lateral band each state's samples sweep: a walker that stays more
-                low, high = Y.min(axis=(1, 2)), Y.max(axis=(1, 2))  # than a reach and its radius beside
-                # it lowers no gap (capped at reach), so that state skips it (the same numbers, bit for bit)
-            for px, py, r, v in moving:  # where it is at each sample's time (bouncing off known walls)
-                wy = bounced(py, v, T, r, faces)
-                rows = (wy.min() - high <= r + reach + 1e-6) & (low - wy.max() <= r + reach + 1e-6)
-                if rows.all():
-                    np.minimum(gap, (np.hypot(X - px, Y - wy) - r).min(-1), out=gap)
-                elif rows.any():
-                    gap[rows] = np.minimum(gap[rows], (np.hypot(X - px, Y[rows] - wy) - r).min(-1))
+                # than a reach and its radius beside it lowers no gap (capped at reach), so that state
+                # skips it (the same numbers, bit for bit); y0 + the paths' least (greatest) lateral
+                # offset is the least (greatest) of y0 + each (a sum is monotone)
+                walked = bounced(moving[:, 1:2], moving[:, 3:4], T[None], moving[:, 2:3], faces)  # (movers,
+                spare = moving[:, 2:3] + reach + 1e-6  # samples): where each is at each sample's time
+                near_rows = ((walked.min(1)[:, None] - (y0 + side[1])[None] <= spare)
+                             & ((y0 + side[0])[None] - walked.max(1)[:, None] <= spare))  # (movers, states)
+                for (px, _, r, _), wy, rows in zip(moving, walked, near_rows, strict=True):
+                    if not rows.any():
+                        continue
+                    # the root of the least squared distance over the samples (a root is monotone), as
+                    # the oracle's check computes it: np.hypot at every sample took four times as long
+                    every_row = bool(rows.all())
+                    dy = Y - wy if every_row else Y[rows] - wy
+                    d2 = np.multiply(dy, dy, out=dy)
+                    d2 += np.square(X - px)
+                    nearest = np.sqrt(d2.min(-1)) - r
+                    if every_row:
+                        np.minimum(gap, nearest, out=gap)
+                    else:
+                        gap[rows] = np.minimum(gap[rows], nearest)
             clear = gap - self.radius
             if not len(doubted):
                 return clear < self.margin, clear - self.margin
@@ -149,6 +188,14 @@ class TrackingPlanner(MappingPlanner):
           at once (all standing, all walking left, all walking right at the course's mean speed),
           weighted by the course's share of walking cylinders.
         """
+        self._standing_rows: dict | None = {}  # the standing points' clearances, shared by its draws
+        try:
+            return self._decide_over_draws(horizon)
+        finally:
+            self._standing_rows = None
+
+    def _decide_over_draws(self, horizon: int) -> tuple[int, np.ndarray]:
+        """:meth:`_decide`'s work."""
         choice, keys = MappingPlanner._decide(self, horizon)
         walks = float(getattr(self.config.world, "moving_fraction", 0.0))
         if not walks:
