@@ -184,15 +184,23 @@ def test_every_benchmark_has_a_smoke_run() -> None:
                                   f"gone: {sorted(set(CASES) - scripts)}"
 
 
+RAY_START_TIMEOUT = "The current node timed out during startup"  #: Ray's own message
+
+
 def run(script: str, store: Path) -> tuple[list[str], subprocess.CompletedProcess]:
     """Run ``script`` at its tiny size as ``make bench`` would; return its arguments and the result."""
     args = [a.replace("{tmp}", str(store)) for a in CASES[script][0]]
     env = {**os.environ, "HUSKY_PROFILE": "quick", "PYTHONUNBUFFERED": "1"}
     env.pop("RAY_ADDRESS", None)  # bench_engines starts its own local cluster, as `make bench` does
-    done = subprocess.run(
-        [sys.executable, str(BENCH / script), *args],
-        cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, stdin=subprocess.DEVNULL,
-    )
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, str(BENCH / script), *args],
+            cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, stdin=subprocess.DEVNULL,
+        )
+        # Ray gives its node a fixed 30 s to start (ray/_private/node.py); on two loaded cores it once
+        # took longer (CI, 2026-12-06). That failure alone is retried, once; any other fails the test
+        if done.returncode == 0 or RAY_START_TIMEOUT not in done.stderr:
+            break
     return args, done
 
 
