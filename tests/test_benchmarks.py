@@ -131,6 +131,13 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"3 moving tuning worlds \({TUNING}\)[\s\S]*discs, velocities first sight, never seen +\d\.\d{{3}}"
         r"[\s\S]*90% of the oracle \(the goal\) +\d\.\d{3}",
     ),
+    "exp_moving_speed_reader.py": (
+        ["--profile", "quick", "--worlds", "10", "--episodes", "3", "--workers", "1", "--epochs", "2"],
+        r"discs on 10 moving training worlds of collection 7 \(quick profile\): \d+ tracked sightings"
+        r"[\s\S]*the tracks' judging: \d\.\d{4}[\s\S]*the reader of the columns: \d\.\d{4}"
+        rf"[\s\S]*episodes on tuning worlds 1000-1002 \({TUNING}\): the planner as it is \d\.\d{{3}}"
+        r"[\s\S]*draws +\d\.\d{3} +\(won only with / only without: \d+ / \d+, p = \d\.\d{3}\)",
+    ),
     "exp_moving_start.py": (
         ["--profile", "quick", "--worlds", "3", "--looks", "0,1", "--planners", "tracking"],
         rf"3 worlds of {TUNING}[\s\S]*tracking +looks before the start: 0 +\d\.\d{{3}} [\s\S]*already fatal"

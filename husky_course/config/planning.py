@@ -230,7 +230,13 @@ class ArrivalsConfig:
     #: the slope's standard error as judged), 0.833 (17 / 12), but 0.816 on worlds 1,000-1,999 (7 / 17
     #: against 0.826); with that error halved (along the runs the slopes' median error is 0.34 of their
     #: standard error, half what a normal error of that spread gives), 0.818 (10 / 20); only the discs
-    #: judged standing drawn so, 0.826 (11 / 13); the tracks' ``error_scale`` 0.25, 0.826 (7 / 9)
+    #: judged standing drawn so, 0.826 (11 / 13); the tracks' ``error_scale`` 0.25, 0.826 (7 / 9). A network
+    #: reading each tracked disc's speed (``benchmarks/exp_moving_speed_reader.py``: trained along the
+    #: planner's runs in 1,500 training worlds of collection 7, from the track's looks and the last images'
+    #: columns) reads speeds a little better than the judging (off by more than 0.1 m per step at 5.9% of
+    #: held-out sightings against 6.2%); taken as the two-look discs' speeds it crossed 0.839, its looks'
+    #: version drawn in place of this error 0.850, against 0.846 on tuning worlds 1,000-1,999 (20 / 27,
+    #: 35 / 31)
     speed_sigma: float = 0.05
     #: how the disc planner breaks ties of the draws' mean safe steps (``TrackingPlanner._decide``): "map",
     #: by the rank of its map's own velocities (clearance bins, then lateral cost, then the lowest index);
