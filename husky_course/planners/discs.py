@@ -267,7 +267,10 @@ class DiscMap:
         # that column stays a scan point, within 0.1 / 0.2 / 0.4 m, 150 / 150 / 149 (0 / 1 to 0 / 2);
         # a cylinder's piece cut where its disc leaves 3 or more points unexplained at one end and each
         # part read again, 147 (5 / 9, p = 0.42). None makes measurably fewer (finer cuts of every
-        # piece: PieceReader.pieces).
+        # piece: PieceReader.pieces). As episodes (tuning worlds 1,000-1,999, against 0.846): kept unless
+        # a new disc lands on it when the column reaches no more than 0.15 m past its front, 0.843 (2 / 5:
+        # seven worlds change); every such lost cylinder given back exactly (exp_moving_memory.py's S,
+        # privileged), 0.857 (14 / 3)
         cam, reader = self.reader.camera, self.reader
         x, y, r = self.discs.T
         dx = x - cam.mount_forward
