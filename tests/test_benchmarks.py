@@ -104,6 +104,14 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*\nlj +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\nmndlf +\d+ +\d+ +\d+ +\d+  \d\.\d{3}"
         r"\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
     ),
+    "exp_moving_lost.py": (  # the drops' privileged runs must decide as the planner does (--check)
+        ["--profile", "quick", "--worlds", "3", "--episodes", "3", "--workers", "1", "--check",
+         "--variants", "keep:0.15", "split:3", "cylinder:0.1", "reloc:0.8:all"],
+        rf"drops on moving tuning worlds 1000-1002 \({TUNING}, quick profile\): \d+ centre-column drops"
+        r"[\s\S]*hidden +\d+[\s\S]*joined +\d+[\s\S]*checked: the drops' runs won the same 3 worlds"
+        rf"[\s\S]*episodes on tuning worlds 1000-1002 \({TUNING}\): the planner as it is \d\.\d{{3}}"
+        r"[\s\S]*reloc:0\.8:all +\d\.\d{3} +\(won only with / only without: \d+ / \d+, p = \d\.\d{3}\)",
+    ),
     "exp_moving_first_decision.py": (
         ["--profile", "quick", "--worlds", "2", "--draws", "1", "--workers", "1"],
         r"2 moving tuning worlds, \d with a way through at the start, 1 draws each[\s\S]*"

@@ -229,6 +229,10 @@ class DiscMap:
         feats, frames_a = self.reader.features_all(pts, cols, d, pieces)
         logit, offset, radius = self.forward(feats)
         centres = frames_a[:, 0] + offset[:, :1] * frames_a[:, 1] + offset[:, 1:] * frames_a[:, 2]
+        # a disc where the network gives even odds or better. On the moving course a lower bar (a probability
+        # of 0.1, the cut network's reads left at 0.5) crossed 0.857 / 0.877 against 0.846 / 0.875 on tuning
+        # worlds 1,000-1,999 / 2,000-2,999 (won only with / only without, pooled: 59 / 46, p = 0.24;
+        # benchmarks/exp_moving_lost.py): not established, not taken
         cyl = logit > 0
         # a wall's columns, and the points a cylinder's disc leaves unexplained, stay scan points
         sel = np.concatenate(pieces)
@@ -270,7 +274,11 @@ class DiscMap:
         # piece: PieceReader.pieces). As episodes (tuning worlds 1,000-1,999, against 0.846): kept unless
         # a new disc lands on it when the column reaches no more than 0.15 m past its front, 0.843 (2 / 5:
         # seven worlds change); every such lost cylinder given back exactly (exp_moving_memory.py's S,
-        # privileged), 0.857 (14 / 3)
+        # privileged), 0.857 (14 / 3). Why the new image makes no disc for it (exp_moving_lost.py, tuning
+        # worlds 1,000-2,999): over 40% are walkers no column sees, their disc half a metre or more off (a
+        # motion error); where the image does hit the cylinder, three times in four with only one or two
+        # columns, in a piece read as a wall or as a neighbour's. Keeping, re-reading or moving such discs
+        # changed no success there
         cam, reader = self.reader.camera, self.reader
         x, y, r = self.discs.T
         dx = x - cam.mount_forward
