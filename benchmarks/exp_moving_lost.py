@@ -85,7 +85,10 @@ the new image in a piece read as a wall (118 and 104) or in one whose disc lies 
 
 Episodes: the planner as it is 0.846 on tuning worlds 1,000-1,999 and 0.875 on 2,000-2,999;
 ``cylinder:0.1`` 0.857 (won only with / only without: 32 / 21, p = 0.17) and 0.877 (27 / 25, p = 0.89),
-pooled 59 / 46 (p = 0.24): about half a point that two slices cannot establish, and not landed.
+pooled 59 / 46 (p = 0.24): about half a point that two slices cannot establish, and not landed. A third
+slice (tuning worlds 3,000-3,999, the same rule wired by this script's ``wire`` in a throwaway driver; the
+script itself runs it as ``--start 3000 --worlds 1000 --episodes 1000 --variants cylinder:0.1``): 0.839
+against 0.840 (35 / 36). On the two slices the value was not chosen on, 62 / 61: no gain at all.
 Prototypes of the other rules (throwaway runs of the same rules on tuning worlds 1,000-1,999, against
 0.846): ``keep:0.15`` 0.843 (2 / 5); ``split:3`` 0.847 (1 / 0: once the cut network has cut, a piece whose
 disc leaves a run of points unexplained at one end is rare); ``reloc:0.8:walk`` 0.843 (0 / 3; it moved 4

@@ -232,7 +232,7 @@ class DiscMap:
         # a disc where the network gives even odds or better. On the moving course a lower bar (a probability
         # of 0.1, the cut network's reads left at 0.5) crossed 0.857 / 0.877 against 0.846 / 0.875 on tuning
         # worlds 1,000-1,999 / 2,000-2,999 (won only with / only without, pooled: 59 / 46, p = 0.24;
-        # benchmarks/exp_moving_lost.py): not established, not taken
+        # benchmarks/exp_moving_lost.py), 0.839 / 0.840 on 3,000-3,999 (35 / 36): not taken
         cyl = logit > 0
         # a wall's columns, and the points a cylinder's disc leaves unexplained, stay scan points
         sel = np.concatenate(pieces)
