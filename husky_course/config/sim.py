@@ -54,7 +54,9 @@ WORLD_KINDS = ("static", "moving")
 @dataclass(frozen=True)
 class MovingWorldConfig(WorldConfig):
     """The moving course (chapter 10): the static course of the same seed, some cylinders walking
-    across it (along ``y``), bouncing off the walls; time counts steps (:func:`.sim.world.make_world`)."""
+    across it (along ``y``), bouncing off the walls; time counts steps (:func:`.sim.world.make_world`).
+    Cylinders do not collide with one another: a walker passes through a standing cylinder, or another
+    walker, in its way (only the robot collides), so the course's layout never changes but by walking."""
 
     moving_fraction: float = 0.4
     speed_range: tuple[float, float] = (0.2, 0.6)  #: m per step; the robot advances 1 m per step

@@ -143,7 +143,8 @@ def make_world(seed: int, cfg: WorldConfig | None = None) -> World:
     world, drawn from the same generator, and then ``round(moving_fraction * n)`` cylinders chosen at
     random get a speed along ``y`` (uniform in ``speed_range``, either sign). A moving cylinder
     starts where the static one stands (moved inside the walls if it overlapped one) and walks
-    across the course, bouncing off the side walls (:meth:`World.obstacles_at`). Why this model:
+    across the course, bouncing off the side walls (:meth:`World.obstacles_at`) and passing through
+    other cylinders (only the robot collides with anything). Why this model:
     crossing traffic is what opens and closes the gaps the robot chooses between, and what a
     forward-facing camera sees least of (a cylinder can walk in from outside the field of view);
     motion along ``y`` only keeps the obstacles' spread along the course, hence the course's length
