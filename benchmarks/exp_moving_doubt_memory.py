@@ -59,7 +59,9 @@ The tracked walkers' spread, both ways (this script, ``--worlds 1000 --start 100
 (won only with / only without: 3 / 13, p = 0.021), ``in-view`` 0.840 (2 / 8, p = 0.11). A throwaway
 prototype of each gave the same figures to the last digit. More spread for a walker out of sight costs
 success, as a 0.15 m error of its place drawn besides did (``ArrivalsConfig.speed_sigma``); less spread
-crossed fewer worlds too, by a margin 1,000 worlds cannot show.
+crossed fewer worlds too, by a margin 1,000 worlds cannot show. A throwaway prototype of ``aged`` that
+shifted only the walkers whose disc lay within 2.5 m ahead won and lost exactly the same worlds as
+``aged`` (0 of 1,000 differ): its cost is the walkers beside and just ahead of the robot.
 """
 
 from __future__ import annotations

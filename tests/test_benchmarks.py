@@ -99,10 +99,15 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*worlds won only with 'draws': \d+, only with 'map': \d+",
     ),
     "exp_moving_memory.py": (  # a shadow told nothing is the driver: it must agree at every decision
-        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--rules", "lj", "mndlf", "--check"],
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--rules", "lj", "mndlf", "e", "--check",
+         "--episodes", "2"],  # and as episodes: told nothing, it must win exactly the planner's worlds
         rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"
         r"[\s\S]*\nlj +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\nmndlf +\d+ +\d+ +\d+ +\d+  \d\.\d{3}"
-        r"\n\(the driver itself\) +0 +\d+ +0 +0  1\.000",
+        r"\ne +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\n\(the driver itself\) +0 +\d+ +0 +0  1\.000"
+        r"[\s\S]*episodes, tuning worlds 1000-1001 \(quick profile\):\n\(as it is\) +\d\.\d{3} \["
+        r"[\s\S]*\ne +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: \d+, only without: \d+"
+        r"[\s\S]*\n\(told nothing\) +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: 0, "
+        r"only without: 0,",
     ),
     "exp_moving_lost.py": (  # the drops' privileged runs must decide as the planner does (--check)
         ["--profile", "quick", "--worlds", "3", "--episodes", "3", "--workers", "1", "--check",

@@ -253,7 +253,12 @@ class ArrivalsConfig:
     #: which one continuation (some draw's best) survives the most steps on average over every draw (a
     #: plan committed to, not re-chosen per draw), 0.825 (33 / 54); to the fewest such steps, 0.787
     #: (44 / 103); an edge through space none of the last three images saw free counting as at most
-    #: 0.1 / 0 m of clearance (the robot's centre line and its sides), 0.844 (38 / 40) / 0.821 (42 / 67)
+    #: 0.1 / 0 m of clearance (the robot's centre line and its sides), 0.844 (38 / 40) / 0.821 (42 / 67); by
+    #: *options*, the end states of the horizon each first primitive's safe plans still reach (the lattice's
+    #: states at its last step, the mean over the draws), before the draws' clearance bins, 0.771 (49 / 124),
+    #: after them (in place of the map's own rank), 0.857 / 0.878 / 0.842 on worlds 1,000-1,999 / 2,000-2,999
+    #: / 3,000-3,999 against 0.846 / 0.875 / 0.840 (33 / 22, 31 / 28, 39 / 37; pooled 103 / 87, p = 0.28):
+    #: half a point three slices cannot establish, as the mirrored tie-break's two points could not
     ties: str = "draws"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
