@@ -120,26 +120,27 @@ rule                                       1,000-1,999      2,000-2,999      3,0
 ``e``: exact places before the tracks      0.859 (47 / 34)  0.877 (37 / 35)  0.855 (56 / 41)
 ``n``: exact places after the tracks       0.840 (31 / 37)
 ``et``: and the tracked discs' motion      0.873 (56 / 29)
-``k``: lost cylinders back, own speeds     0.854 (16 / 8)
+``k``: lost cylinders back, own speeds     0.854 (16 / 8)                    0.849 (19 / 10)
 ``l``: lost cylinders back, true speeds    0.868 (39 / 17)                   0.867 (41 / 14)
 ``el``                                     0.881 (59 / 24)                   0.885 (78 / 33)
 ``ek``                                     0.868 (52 / 30)
 =========================================  ===============  ===============  ===============
 
-On 1,000-1,999 ``e``, ``k``, ``l``, ``el`` and ``ek`` come from throwaway drivers of this script's planners
-(:class:`MemoryToldPlanner`, the base figure reproduced to the last world), the rest from the script itself;
-``e`` on 3,000-3,999 printed the same figures through both. Exact places are worth 0.2 to 1.5 points (pooled
-140 / 110, p = 0.07), all of it through what the tracks read of motion: the same places put in after the
-tracks have read them (``n``) gain nothing. A better network would find little to give there: along the
-planner's runs (a throwaway count on tuning worlds 4,000-4,149, 13,957 cylinder discs) its centres are off by
-0.021 m at the median, 0.009 m for a cylinder seen whole within 3 m and 0.038 m beyond (one of the 50 columns
-spans 0.14 m at 3 m, 0.18 m at 4 m), 0.059 m where a nearer surface hides part of it; laterally more than
-0.1 m off at 5.8% of the discs, 0.5% of the whole ones within 3 m, 14.7% of the partly hidden ones. The lost
-cylinders given back are worth two to three points, but given back walking at the speed the map last held
-for them (``k``) only 0.8 on 1,000-1,999 (``l`` against ``k``: 29 / 15, p = 0.049; with exact places, ``ek``
-0.868 against ``el`` 0.881): what the memory misses is mostly where its hidden walkers have walked, a motion
-error again. With both told (``el``) the planner crosses above 0.873, the goal's figure on the reporting set,
-on both slices; neither half is within a camera's reach as it is told here.
+``k`` everywhere and, on 1,000-1,999, ``e``, ``l``, ``el`` and ``ek`` come from throwaway drivers of this
+script's planners (:class:`MemoryToldPlanner`, the base figure reproduced to the last world), the rest from
+the script itself; ``e`` on 3,000-3,999 printed the same figures through both. Exact places are worth 0.2 to
+1.5 points (pooled 140 / 110, p = 0.07), all of it through what the tracks read of motion: the same places
+put in after the tracks have read them (``n``) gain nothing. A better network would find little to give
+there: along the planner's runs (a throwaway count on tuning worlds 4,000-4,149, 13,957 cylinder discs) its
+centres are off by 0.021 m at the median, 0.009 m for a cylinder seen whole within 3 m and 0.038 m beyond
+(one of the 50 columns spans 0.14 m at 3 m, 0.18 m at 4 m), 0.059 m where a nearer surface hides part of it;
+laterally more than 0.1 m off at 5.8% of the discs, 0.5% of the whole ones within 3 m, 14.7% of the partly
+hidden ones. The lost cylinders given back are worth two to three points, but given back walking at the
+speed the map last held for them (``k``) only 0.8 and 0.9 (on 1,000-1,999 ``l`` against ``k``: 29 / 15, p =
+0.049; with exact places, ``ek`` 0.868 against ``el`` 0.881): what the memory misses is mostly where its
+hidden walkers have walked, a motion error again. With both told (``el``) the planner crosses above 0.873,
+the goal's figure on the reporting set, on both slices; neither half is within a camera's reach as it is
+told here.
 """
 
 from __future__ import annotations
