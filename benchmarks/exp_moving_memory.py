@@ -166,6 +166,14 @@ LETTERS = "mtndelkSLNBfcj"  #: the rules' letters (module docstring)
 LOST_WAYS = "SLNB"  #: how a cylinder was lost: ``l`` gives back every one, these only their kind
 
 
+def belonging(discs: np.ndarray, cylinders: np.ndarray) -> np.ndarray:
+    """Per disc of ``discs (k, 3+)``: the index of the cylinder of ``cylinders (n, 3)`` whose surface lies
+    nearest its centre, or -1 when that is ``ON_CYLINDER`` or further."""
+    gap = np.hypot(discs[:, :1] - cylinders[:, 0], discs[:, 1:2] - cylinders[:, 1]) - cylinders[:, 2]
+    j = np.argmin(gap, axis=1)
+    return np.where(gap[np.arange(len(j)), j] < ON_CYLINDER, j, -1)
+
+
 class RememberingMap(WalkingDiscMap):
     """A walking disc map that knows which cylinder each disc belongs to, and how each seen cylinder
     it no longer holds was lost; told the truth as ``rule`` says (module docstring). Privileged."""
@@ -185,9 +193,8 @@ class RememberingMap(WalkingDiscMap):
         if "e" in self.rule and cyl.any():  # before the tracks read the discs' places
             assert self.eyes.world is not None
             true = truth_in_frame(self.eyes.world, self.pose, self.time)[0]
-            gap = np.hypot(discs[:, :1] - true[:, 0], discs[:, 1:2] - true[:, 1]) - true[:, 2]
-            j = np.argmin(gap, axis=1)
-            on = cyl & (gap[np.arange(len(j)), j] < ON_CYLINDER)
+            j = belonging(discs, true)
+            on = cyl & (j >= 0)
             discs = discs.copy()
             discs[on] = true[j[on]]
         return discs, cyl, other
@@ -208,9 +215,7 @@ class RememberingMap(WalkingDiscMap):
         cyl, vy = truth_in_frame(self.eyes.world, self.pose, self.time)
         born = len(self.discs) - int(self.kept.sum())
         if born:
-            gap = np.hypot(self.discs[:born, :1] - cyl[:, 0], self.discs[:born, 1:2] - cyl[:, 1]) - cyl[:, 2]
-            j = np.argmin(gap, axis=1)
-            self.ids = np.r_[np.where(gap[np.arange(born), j] < ON_CYLINDER, j, -1), old[self.kept]]
+            self.ids = np.r_[belonging(self.discs[:born], cyl), old[self.kept]]
         else:
             self.ids = old[self.kept]
         on, rule = self.ids >= 0, self.rule
