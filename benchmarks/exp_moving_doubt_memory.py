@@ -1,8 +1,9 @@
 """Experiment: what the moving disc planner takes as certain that it could doubt instead.
 
 Run: ``python benchmarks/exp_moving_doubt_memory.py [--profile full] [--worlds 2000] [--start 1000]
-[--variants remembered evidence posterior promote aged in-view] [--workers 2] [--check]`` (the disc
-planner needs its network: ``python -m husky_course train discs``).
+[--variants remembered evidence posterior promote aged in-view] [--workers 2] [--check] [--base B.npz]``
+(the disc planner needs its network: ``python -m husky_course train discs``; ``--base``: the planner's own
+episodes kept for the next run, as ``exp_moving_variants.py`` keeps them).
 
 The disc planner draws, at every decision, walks for the last image's undecided first sights and speeds
 for its tracked walkers (``ArrivalsConfig.samples``); everything else in its map it takes as it reads it.
@@ -67,20 +68,17 @@ shifted only the walkers whose disc lay within 2.5 m ahead won and lost exactly 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
+import exp_moving_variants as variants
 import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.course.diagnosis import sign_test
-from husky_course.engines import map_tasks
-from husky_course.evaluation.episodes import eval_world_seeds, run_episode
-from husky_course.evaluation.statistics import clopper_pearson
 from husky_course.planners.mapping import MappingPlanner
 from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.registry import make_planner
 from husky_course.planners.tracking import _bins, _ranked, _steps
 from husky_course.planners.walls import bounced
-from husky_course.sim.fast import FastSimulator
 
 DOUBTS = ("remembered", "evidence", "posterior", "promote", "aged", "in-view")
 NOTHING = "nothing doubted"  #: the variant that must be the planner as it is (``--check``)
@@ -229,13 +227,6 @@ def doubting_planner(profile: Profile, variant: str):
     return planner
 
 
-def episodes(args: tuple[Profile, list[int], str]) -> list[bool]:
-    """Success of ``variant`` in each world of ``seeds``."""
-    profile, seeds, variant = args
-    sim, planner = FastSimulator(profile.sim), doubting_planner(profile, variant)
-    return [run_episode(planner, sim, s, profile.sim.max_primitives).success for s in seeds]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="full")
@@ -244,26 +235,15 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1, help="evaluation set (1: the tuning set)")
     parser.add_argument("--variants", nargs="+", default=list(DOUBTS))
     parser.add_argument("--check", action="store_true", help="add the variant with nothing doubted")
+    parser.add_argument("--base", type=Path, help=variants.BASE_HELP)
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
     profile = with_world(get_profile(args.profile), "moving")
-    worlds = [int(s) for s in eval_world_seeds(args.start + args.worlds, args.seed)[args.start :]]
-    last = args.start + args.worlds - 1
-    print(f"discs on worlds {args.start}-{last} of evaluation set {args.seed}, moving course, "
-          f"{args.profile} profile", flush=True)
-    won = {}
-    for variant in ["as it is", *args.variants, *([NOTHING] if args.check else [])]:
+    names = [*args.variants, *([NOTHING] if args.check else [])]
+    for variant in names:
         doubting_planner(profile, variant)  # a bad name fails before any world runs
-        parts = [(profile, worlds[i : i + 10], variant) for i in range(0, len(worlds), 10)]
-        done = map_tasks(episodes, parts, workers=args.workers, desc=variant, unit="10 worlds")
-        won[variant] = a = np.array([w for p in done for w in p])
-        lo, hi = clopper_pearson(int(a.sum()), len(a))
-        line = f"  {variant:30s} {a.mean():.3f} [{lo:.3f}, {hi:.3f}]"
-        if variant != "as it is":
-            b = won["as it is"]
-            line += (f"  won only with it: {int((a & ~b).sum())}, only without: {int((b & ~a).sum())}, "
-                     f"p = {sign_test(~a, ~b)[2]:.3f}")
-        print(line, flush=True)
+    worlds = variants.tuning_worlds(args.start, args.worlds, args.profile, args.seed)
+    variants.paired_episodes(doubting_planner, names, profile, worlds, args.workers, args.base)
 
 
 if __name__ == "__main__":

@@ -2,8 +2,8 @@
 
 Run: ``python benchmarks/exp_moving_lost.py [--profile full] [--worlds 1000] [--start 1000]
 [--episodes 1000] [--variants keep:0.15 split:3 cylinder:0.1 reloc:0.8:walk reloc:0.8:all] [--workers 2]
-[--check]``
-(the disc planner needs its networks: ``python -m husky_course train discs``).
+[--check] [--base B.npz]`` (the disc planner needs its networks: ``python -m husky_course train discs``;
+``--base``: the planner's own episodes kept for the next run, as ``exp_moving_variants.py`` keeps them).
 
 Why: told back exactly every cylinder whose disc its map dropped at the disc's centre column, the disc
 planner crosses 0.857 of tuning worlds 1,000-1,999 against 0.846 (``exp_moving_memory.py``'s rule ``S``,
@@ -43,12 +43,13 @@ from __future__ import annotations
 import argparse
 import collections
 import types
+from pathlib import Path
 
 import exp_moving_memory as memory
+import exp_moving_variants as variants
 import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.course.diagnosis import sign_test
 from husky_course.engines import map_tasks
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
@@ -284,14 +285,12 @@ def wire(planner, variant: str) -> None:
         _reloc(planner, float(values[0]), values[1] if len(values) > 1 else "walk")
 
 
-def episodes(args: tuple[Profile, list[int], str]) -> list[bool]:
-    """Success in each of ``seeds``: the disc planner as it is (``base``) or with ``variant``'s rule."""
-    profile, seeds, variant = args
+def wired(profile: Profile, variant: str):
+    """The disc planner with ``variant``'s rule (``"nothing"``: the planner as it is)."""
     planner = make_planner("discs", config=profile.sim, profile=profile)
-    if variant != "base":
+    if variant != "nothing":
         wire(planner, variant)
-    sim = FastSimulator(profile.sim)
-    return [run_episode(planner, sim, s, profile.sim.max_primitives).success for s in seeds]
+    return planner
 
 
 def report(found: list, worlds: int, first: int, profile: str) -> None:
@@ -318,6 +317,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=1000, help="tuning worlds per variant (0: none)")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS))
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--base", type=Path, help=variants.BASE_HELP)
     parser.add_argument("--check", action="store_true",
                         help="run the planner as it is too: fail unless the drops' runs won its worlds")
     args = parser.parse_args()
@@ -334,25 +334,19 @@ def main() -> None:
         won["base"] = np.array([w for p in parts for w in p[1]])
     if not args.episodes:
         return
-    tuning = seeds[: args.episodes]
-    for variant in ("base", *args.variants):
-        if variant == "base" and len(won.get("base", ())) == len(tuning) and not args.check:
-            continue  # the drops' runs were the planner as it is, on the same worlds (--check: they are)
-        tasks = [(profile, tuning[i : i + 10], variant) for i in range(0, len(tuning), 10)]
-        ran = np.array([s for p in map_tasks(episodes, tasks, workers=args.workers, desc=variant) for s in p])
-        if variant == "base" and "base" in won:
-            same = won["base"][: len(ran)] == ran[: len(won["base"])]
-            if not same.all():
-                raise SystemExit(f"the drops' runs and the planner differ in {int((~same).sum())} worlds")
-            print(f"checked: the drops' runs won the same {int(same.size)} worlds as the planner as it is")
-        won[variant] = ran
+    tuning, known = seeds[: args.episodes], won.get("base")
+    if known is not None and len(known) == len(tuning) and not args.check:
+        print("  (the drops' runs were the planner as it is, on the same worlds)")
+    else:
+        known = None  # --check: run it again, and the drops' runs must have won the same worlds
     last = args.start + args.episodes - 1
-    print(f"episodes on tuning worlds {args.start}-{last} (evaluation set 1): the planner as it is "
-          f"{won['base'].mean():.3f}")
-    for variant in args.variants:
-        only, without, p = sign_test(won[variant], won["base"])
-        print(f"  {variant:14s} {won[variant].mean():.3f}  (won only with / only without: {only} / "
-              f"{without}, p = {p:.3f})")
+    print(f"episodes on tuning worlds {args.start}-{last} (evaluation set 1):", flush=True)
+    ran = variants.paired_episodes(wired, args.variants, profile, tuning, args.workers, args.base, known)
+    if known is None and "base" in won:
+        same = won["base"][: args.episodes] == ran[variants.AS_IT_IS][: len(won["base"])]
+        if not same.all():
+            raise SystemExit(f"the drops' runs and the planner differ in {int((~same).sum())} worlds")
+        print(f"checked: the drops' runs won the same {int(same.size)} worlds as the planner as it is")
 
 
 if __name__ == "__main__":

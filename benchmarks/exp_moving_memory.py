@@ -1,8 +1,8 @@
 """Experiment: what the moving disc planner's memory of seen cylinders costs, priced from the same states.
 
 Run: ``python benchmarks/exp_moving_memory.py [--profile full] [--worlds 1000] [--start 0] [--workers 2]
-[--rules l S N L ml mdl mndl] [--check] [--save F.npz] [--episodes 1000 --episodes-start 1000]`` (the disc
-planner needs its network: ``python -m husky_course train discs``).
+[--rules l S N L ml mdl mndl] [--check] [--save F.npz] [--episodes 1000 --episodes-start 1000 [--base
+B.npz]]`` (the disc planner needs its network: ``python -m husky_course train discs``).
 
 ``exp_moving_paired.py`` judges variants of the disc planner as shadows of the planner as it is, at
 the same states. Told every cylinder an image has rendered so far, exactly, a shadow made 55 fatal
@@ -35,7 +35,9 @@ says, a string of letters:
 With ``--episodes N`` each rule then runs as a planner on ``N`` tuning worlds from ``--episodes-start``
 (evaluation set 1; ``--worlds 0``: episodes only), beside the planner as it is on the same worlds
 (success with its exact interval; the worlds won only with the rule / only without it, with an exact sign
-test; ``--check`` adds the rule that tells nothing, which must win exactly the planner's worlds).
+test; ``--check`` adds the rule that tells nothing, which must win exactly the planner's worlds;
+``--base B.npz`` keeps the planner's own episodes for the next run: ``exp_moving_variants.py``, which also
+runs these rules beside the other experiments' variants).
 
 A disc *belongs* to the cylinder whose surface lies nearest its centre (within ``ON_CYLINDER``) when
 the image that made it was taken, and keeps that identity as the map carries it: the truth is read
@@ -147,19 +149,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import exp_moving_paired as paired
+import exp_moving_variants as variants
 import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.course.diagnosis import sign_test
-from husky_course.engines import map_tasks
-from husky_course.evaluation.episodes import eval_world_seeds, run_episode
-from husky_course.evaluation.statistics import clopper_pearson
-from husky_course.planners.base import EpisodeStart
+from husky_course.planners.base import EpisodeStart, Planner
 from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.reference import ON_CYLINDER, TOLD_RULES, ToldDiscsPlanner, truth_in_frame
-from husky_course.planners.registry import make_planner
 from husky_course.sim.fast import FastSimulator
 
 LETTERS = "mtndelkSLNBfcj"  #: the rules' letters (module docstring)
@@ -299,32 +298,12 @@ def check_rule(rule: str) -> str:
     return rule
 
 
-def episodes(args: tuple[Profile, list[int], str | None]) -> list[bool]:
-    """Success in each world of ``seeds`` of the planner told ``rule`` (None: the planner as it is)."""
-    profile, seeds, rule = args
-    sim = FastSimulator(profile.sim)
-    planner = (make_planner("discs", config=profile.sim, profile=profile) if rule is None
-               else MemoryToldPlanner(profile, rule))
-    return [run_episode(planner, sim, s, profile.sim.max_primitives).success for s in seeds]
+NOTHING_TOLD = "(told nothing)"  #: the rule that tells nothing, as ``--check`` names it
 
 
-def run_episodes(profile_name: str, rules: list[str], n: int, start: int, workers: int) -> None:
-    """Each of ``rules`` as a planner on ``n`` tuning worlds from ``start``, beside the planner as it is."""
-    profile = with_world(get_profile(profile_name), "moving")
-    worlds = [int(s) for s in eval_world_seeds(start + n, 1)[start:]]
-    print(f"episodes, tuning worlds {start}-{start + n - 1} ({profile_name} profile):", flush=True)
-    won: dict[str | None, np.ndarray] = {}
-    for rule in [None, *rules]:
-        parts = [(profile, worlds[i : i + 10], rule) for i in range(0, len(worlds), 10)]
-        name = "(as it is)" if rule is None else rule or "(told nothing)"
-        done = map_tasks(episodes, parts, workers=workers, desc=name, unit="10 worlds")
-        won[rule] = a = np.array([w for p in done for w in p], bool)
-        lo, hi = clopper_pearson(int(a.sum()), len(a))
-        line = f"{name:16s} {a.mean():.3f} [{lo:.3f}, {hi:.3f}]"
-        if rule is not None:
-            only_a, only_b, p = sign_test(a, won[None])
-            line += f"  won only with it: {only_a}, only without: {only_b}, p = {p:.3f}"
-        print(line, flush=True)
+def told(profile: Profile, rule: str) -> Planner:
+    """The planner whose map is told ``rule`` (:class:`MemoryToldPlanner`; :data:`NOTHING_TOLD`: "")."""
+    return MemoryToldPlanner(profile, "" if rule == NOTHING_TOLD else rule)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -334,6 +313,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--rules", nargs="+", default=["l", "S", "N", "L", "ml", "mdl", "mndl"])
     parser.add_argument("--episodes", type=int, default=0, help="worlds of episodes per rule (0: none)")
     parser.add_argument("--episodes-start", type=int, default=1000)
+    parser.add_argument("--base", type=Path, help=variants.BASE_HELP)
     args, rest = parser.parse_known_args(argv)
     rules = [check_rule(r.strip()) for r in args.rules]
     known, _ = paired_options().parse_known_args(rest)
@@ -342,8 +322,10 @@ def main(argv: list[str] | None = None) -> None:
         paired.variant_planner = MemoryToldPlanner  # the workers are forked: they see the replacement
         paired.main([*rest, "--variants", *rules])
     if args.episodes > 0:
-        run_episodes(known.profile, rules + ([""] if known.check else []), args.episodes,
-                     args.episodes_start, known.workers)
+        profile = with_world(get_profile(known.profile), "moving")
+        worlds = variants.tuning_worlds(args.episodes_start, args.episodes, profile.name)
+        variants.paired_episodes(told, rules + ([NOTHING_TOLD] if known.check else []), profile, worlds,
+                                 known.workers, args.base)
 
 
 def paired_options() -> argparse.ArgumentParser:

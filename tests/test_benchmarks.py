@@ -104,18 +104,28 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"discs on moving tuning worlds 0-2 \({TUNING}, quick profile\): \d+ winnable decisions compared"
         r"[\s\S]*\nlj +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\nmndlf +\d+ +\d+ +\d+ +\d+  \d\.\d{3}"
         r"\ne +\d+ +\d+ +\d+ +\d+  \d\.\d{3}\n\(the driver itself\) +0 +\d+ +0 +0  1\.000"
-        r"[\s\S]*episodes, tuning worlds 1000-1001 \(quick profile\):\n\(as it is\) +\d\.\d{3} \["
-        r"[\s\S]*\ne +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: \d+, only without: \d+"
-        r"[\s\S]*\n\(told nothing\) +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: 0, "
+        rf"[\s\S]*episodes, worlds 1000-1001 of {TUNING} \(tuning\), moving course, quick profile:\n"
+        r" +\(as it is\) +\d\.\d{3} \["
+        r"[\s\S]*\n +e +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: \d+, only without: \d+"
+        r"[\s\S]*\n +\(told nothing\) +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: 0, "
         r"only without: 0,",
     ),
     "exp_moving_lost.py": (  # the drops' privileged runs must decide as the planner does (--check)
         ["--profile", "quick", "--worlds", "3", "--episodes", "3", "--workers", "1", "--check",
          "--variants", "keep:0.15", "split:3", "cylinder:0.1", "reloc:0.8:all"],
         rf"drops on moving tuning worlds 1000-1002 \({TUNING}, quick profile\): \d+ centre-column drops"
-        r"[\s\S]*hidden +\d+[\s\S]*joined +\d+[\s\S]*checked: the drops' runs won the same 3 worlds"
-        rf"[\s\S]*episodes on tuning worlds 1000-1002 \({TUNING}\): the planner as it is \d\.\d{{3}}"
-        r"[\s\S]*reloc:0\.8:all +\d\.\d{3} +\(won only with / only without: \d+ / \d+, p = \d\.\d{3}\)",
+        r"[\s\S]*hidden +\d+[\s\S]*joined +\d+"
+        rf"[\s\S]*episodes on tuning worlds 1000-1002 \({TUNING}\):\n +\(as it is\) +\d\.\d{{3}} \["
+        r"[\s\S]*\n +reloc:0\.8:all +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}\n"
+        r"checked: the drops' runs won the same 3 worlds",
+    ),
+    "exp_moving_variants.py": (  # each script's variant that changes nothing must win the planner's worlds
+        ["--profile", "quick", "--worlds", "2", "--workers", "1", "--check", "--base", "{tmp}/base.npz",
+         "--variants", "memory:e", "lost:keep:0.15", "doubt:aged"],
+        rf"episodes, worlds 1000-1001 of {TUNING} \(tuning\), moving course, quick profile:\n"
+        r" +\(as it is\) +\d\.\d{3} \[[\s\S]*\n +memory:e +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}"
+        r"[\s\S]*\n +lost:keep:0\.15 +\d\.\d{3} \[[\s\S]*\n +doubt:aged +\d\.\d{3} \["
+        r"[\s\S]*\nchecked: 3 variants that change nothing won exactly the planner's worlds",
     ),
     "exp_moving_first_decision.py": (
         ["--profile", "quick", "--worlds", "2", "--draws", "1", "--workers", "1"],
@@ -169,7 +179,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     "exp_moving_doubt_memory.py": (  # the map doubting nothing must win exactly the driver's worlds
         ["--profile", "quick", "--worlds", "3", "--start", "0", "--workers", "1",
          "--variants", "evidence+posterior+promote+aged", "in-view", "--check"],
-        rf"discs on worlds 0-2 of {TUNING}, moving course, quick profile\n +as it is +\d\.\d{{3}} \["
+        rf"episodes, worlds 0-2 of {TUNING} \(tuning\), moving course, quick profile:\n"
+        r" +\(as it is\) +\d\.\d{3} \["
         r"[\s\S]*evidence\+posterior\+promote\+aged +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}\n"
         r"[\s\S]*in-view +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}\n"
         r" +nothing doubted +\d\.\d{3} \[.*won only with it: 0, only without: 0, p = 1\.000",
