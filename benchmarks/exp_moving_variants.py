@@ -36,6 +36,7 @@ import torch
 from husky_course.config import Profile, config_hash, get_profile, with_world
 from husky_course.course.diagnosis import sign_test
 from husky_course.data.code import library_fingerprint
+from husky_course.data.io import atomic_save_npz, load_npz
 from husky_course.engines import map_tasks
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.evaluation.statistics import clopper_pearson
@@ -92,11 +93,11 @@ def _base(base: Path, key: str) -> np.ndarray | None:
     """The successes ``base`` holds under ``key``, or None (no file, or another key's)."""
     if not base.exists():
         return None
-    with np.load(base, allow_pickle=False) as f:
-        if str(f["key"]) == key:
-            print(f"  the planner as it is: read from {base} (key {key})", flush=True)
-            return f["won"].astype(bool)
-        print(f"  {base} holds another key ({f['key']}, not {key}): the planner runs again", flush=True)
+    f = load_npz(base)  # a truncated or foreign file fails with a clear error
+    if str(f.get("key")) == key and "won" in f:
+        print(f"  the planner as it is: read from {base} (key {key})", flush=True)
+        return f["won"].astype(bool)
+    print(f"  {base} holds another key ({f.get('key')}, not {key}): the planner runs again", flush=True)
     return None
 
 
@@ -127,10 +128,7 @@ def paired_episodes(build: Callable[[Profile, str], Planner], variants: list[str
             a = np.array([w for part in done for w in part], bool)
             if name == AS_IT_IS and base is not None:
                 base.parent.mkdir(parents=True, exist_ok=True)
-                part = base.with_name(base.name + ".part")  # a killed run leaves no half-written file
-                with open(part, "wb") as f:
-                    np.savez(f, key=key, won=a)
-                part.replace(base)
+                atomic_save_npz(base, {"key": np.array(key), "won": a})  # never half-written
         won[name] = a
         lo, hi = clopper_pearson(int(a.sum()), len(a))
         line = f"  {name:30s} {a.mean():.3f} [{lo:.3f}, {hi:.3f}]"
