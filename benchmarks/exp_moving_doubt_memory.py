@@ -63,6 +63,8 @@ success, as a 0.15 m error of its place drawn besides did (``ArrivalsConfig.spee
 crossed fewer worlds too, by a margin 1,000 worlds cannot show. A throwaway prototype of ``aged`` that
 shifted only the walkers whose disc lay within 2.5 m ahead won and lost exactly the same worlds as
 ``aged`` (0 of 1,000 differ): its cost is the walkers beside and just ahead of the robot.
+The figures above were measured before the planner broke the last ties by its draws' options
+(``ArrivalsConfig.ties`` "options"); the script runs the planner as it is now.
 """
 
 from __future__ import annotations
@@ -74,10 +76,9 @@ import exp_moving_variants as variants
 import numpy as np
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.planners.mapping import MappingPlanner
 from husky_course.planners.moving_discs import WalkingDiscMap
 from husky_course.planners.registry import make_planner
-from husky_course.planners.tracking import _bins, _ranked, _steps
+from husky_course.planners.tracking import Tally
 from husky_course.planners.walls import bounced
 
 DOUBTS = ("remembered", "evidence", "posterior", "promote", "aged", "in-view")
@@ -170,20 +171,21 @@ def posterior(tracks, track: np.ndarray, hypotheses: np.ndarray) -> np.ndarray:
 
 
 def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
-    """``TrackingPlanner._decide``'s draws (``ties="draws"``), with the map's remembered first sights drawn
-    too, each put where its drawn walk has taken it since its birth."""
-    choice, keys = MappingPlanner._decide(planner, horizon)
+    """``TrackingPlanner._decide``'s draws, with the map's remembered first sights drawn too, each put where
+    its drawn walk has taken it since its birth."""
+    lattice, ranking = planner._ranking(horizon)
+    choice, keys = int(ranking.choice[0][0]), ranking.keys[0][0]
     m, h = planner.map, planner.map.arrivals.hypotheses
     group, weights = m.walk_doubt
     tracked = planner.tracked if planner.speed_sigma > 0 else np.zeros(0, bool)
     index, born = m.remembered()
     if not (len(weights) or tracked.any() or len(index)):
-        return choice, keys
+        return Tally.undrawn(planner.ties, choice, keys, lattice)
     rng = np.random.default_rng((planner._key, planner._remaining))
     later = np.random.default_rng((planner._key, planner._remaining, 7))  # the driver's draws unchanged
-    total, base, k = np.zeros(len(keys)), planner.velocity, int(tracked.sum())
+    tally, base, k = Tally(planner.ties, keys), planner.velocity, int(tracked.sum())
     drawn_ones = (group >= 0) & (base == 0) if len(weights) else None
-    least, clear, y0 = np.full(len(keys), np.inf), np.zeros(len(keys)), m.discs[:, 1].copy()
+    y0 = m.discs[:, 1].copy()
     for _ in range(planner.samples):
         speeds = base.copy()
         if drawn_ones is not None:
@@ -203,18 +205,16 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
             turned = bounced(y0[index], v, age + 1e-3, r, m.faces) - m.discs[index, 1]
             speeds[index] = np.sign(turned) * np.abs(v)
         try:
-            drawn_keys = planner._keys_if(horizon, speeds)
+            tally.add(planner._keys_if(horizon, speeds), planner._drawn)
         finally:
             m.discs[:, 1] = y0
-        total, bins = total + _steps(drawn_keys), _bins(drawn_keys)
-        least, clear = np.minimum(least, bins), clear + bins
-    return _ranked(total / planner.samples, keys, (least, clear / planner.samples))
+    return tally.ranked()
 
 
 def doubting_planner(profile: Profile, variant: str):
-    """The disc planner (``ties="draws"``) doubting what ``variant`` names (``+``-joined :data:`DOUBTS`;
-    :data:`NOTHING`: none); the planner as it is for ``"as it is"``."""
-    planner = make_planner("discs", config=profile.sim, profile=profile, ties="draws")
+    """The disc planner doubting what ``variant`` names (``+``-joined :data:`DOUBTS`; :data:`NOTHING`:
+    none); the planner as it is for ``"as it is"``."""
+    planner = make_planner("discs", config=profile.sim, profile=profile)
     if variant == "as it is":
         return planner
     doubts = frozenset() if variant == NOTHING else frozenset(variant.split("+"))

@@ -36,6 +36,8 @@ new image so often makes none, and runs the rules that would keep the cylinder a
      the discs read walking, or all.
 
 Measured (full profile): see :data:`MEASURED`.
+Its figures were measured before the planner broke the last ties by its draws' options
+(``ArrivalsConfig.ties`` "options"); the script runs the planner as it is now.
 """
 
 from __future__ import annotations

@@ -32,6 +32,8 @@ place). With three looks the share is 3%, with four 1.5%.
    looks' reader's probabilities, in place of the tracked walkers' normal error (``speed_sigma``).
 
 Measured (full profile): see :data:`MEASURED`.
+Its figures were measured before the planner broke the last ties by its draws' options
+(``ArrivalsConfig.ties`` "options"); the script runs the planner as it is now.
 """
 
 from __future__ import annotations
@@ -250,16 +252,15 @@ def wire(planner, readers: dict, variant: str, speeds: np.ndarray) -> None:
 def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     """``TrackingPlanner._decide_over_draws`` with each read disc's speed drawn from its reader's classes
     (a bin's speed uniform within it) in place of the tracked walkers' normal error."""
-    choice, keys = tracking.MappingPlanner._decide(self, horizon)
+    keys = tracking.MappingPlanner._decide(self, horizon)[1]
     group, weights = self.map.walk_doubt
     prob, at = self.map.read
     read = np.zeros(len(self.points), bool)
     read[at] = True
     tracked = self.tracked & ~read
     rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
-    total, base, k = np.zeros(len(keys)), self.velocity, int(tracked.sum())
+    tally, base, k = tracking.Tally(self.ties, keys), self.velocity, int(tracked.sum())
     drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
-    least, clear = np.full(len(keys), np.inf), np.zeros(len(keys))
     half = (speeds[2] - speeds[1]) / 2
     for _ in range(self.samples):
         v = base.copy()
@@ -271,11 +272,8 @@ def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
         if len(at):
             c = np.array([rng.choice(17, p=p / p.sum()) for p in prob])
             v[at] = speeds[c] + np.where(c > 0, rng.uniform(-half, half, len(c)), 0.0)
-        drawn_keys = self._keys_if(horizon, v)
-        total += tracking._steps(drawn_keys)
-        b = tracking._bins(drawn_keys)
-        least, clear = np.minimum(least, b), clear + b
-    return tracking._ranked(total / self.samples, keys, (least, clear / self.samples))
+        tally.add(self._keys_if(horizon, v), self._drawn)
+    return tally.ranked()
 
 
 def episodes(args: tuple[Profile, list[int], str, dict]) -> list[bool]:

@@ -224,8 +224,11 @@ display(Markdown(
 # that most versions survive; the measurements on the tuning set are in `ArrivalsConfig`. Most
 # decisions end in a tie: several primitives survive every version to the horizon. The tie goes to
 # the one whose plan keeps the most clearance in its worst version, then on average over the
-# versions (`ArrivalsConfig.ties`), not to the one its single guess of the motion ranks first:
-# a pass that stays wide whatever the doubted cylinders do (`benchmarks/exp_moving_ties.py`).
+# versions, not to the one its single guess of the motion ranks first: a pass that stays wide
+# whatever the doubted cylinders do (`benchmarks/exp_moving_ties.py`). What still ties goes to the
+# first primitive after which its safe plans reach the most places at the horizon's end, on average
+# over the versions: the move that keeps the most ways open for what the camera has not yet shown
+# (`ArrivalsConfig.ties`).
 # Whether those doubts have the right size, `benchmarks/exp_moving_beliefs.py` measures along the
 # planner's own runs, each belief beside the truth (privileged, an analysis tool).
 # The tracker plans on its map's single guess.

@@ -243,13 +243,14 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
     speed plus a normal error of spread ``speed_sigma`` and each undecided first sight a walk from its
     weights; nothing else (standing discs, walls) moves. The choice is the first primitive with the most
     mean safe steps over the draws, its ties broken by the draws' clearance (``ties="draws"``, the
-    fewest bins over the draws, then their mean) or by the map's own rank (``ties="map"``); the same
-    seed draws the same walks, and ``speed_sigma`` 0 draws no error: the first sights' draws alone."""
+    fewest bins over the draws, then their mean; ``ties="options"``, then the mean over the draws of
+    their lattices' options) or by the map's own rank (``ties="map"``); the same seed draws the same walks,
+    and ``speed_sigma`` 0 draws no error: the first sights' draws alone."""
     from husky_course.config import get_profile, with_world
     from husky_course.evaluation.episodes import eval_world_seeds, run_episode
     from husky_course.planners.mapping import MappingPlanner
     from husky_course.planners.registry import make_planner
-    from husky_course.planners.tracking import _bins, _ranked, _steps
+    from husky_course.planners.tracking import _bins, _ranked, _steps, reachable_ends
     from husky_course.sim.fast import FastSimulator
 
     profile = with_world(get_profile("quick"), "moving")
@@ -266,7 +267,7 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
 
         def record(horizon: int, speeds: np.ndarray) -> np.ndarray:
             keys = keys_if(horizon, speeds)
-            draws.append((speeds.copy(), keys))
+            draws.append((speeds.copy(), keys, reachable_ends(planner._drawn)))
             return keys
 
         def check(horizon: int) -> tuple[int, np.ndarray]:
@@ -275,15 +276,17 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
             if draws:
                 group, _ = planner.map.walk_doubt
                 base, tracked = planner.velocity, planner.tracked
-                speeds = np.array([s for s, _ in draws])
+                speeds = np.array([s for s, _, _ in draws])
                 still = ~(tracked | ((group >= 0) & planner.doubtful))
                 assert len(draws) == samples and (speeds[:, still] == base[still]).all()
                 errors.extend((speeds[:, tracked] - base[tracked]).ravel())
                 keys = MappingPlanner._decide(planner, horizon)[1]
-                mean = np.mean([_steps(k) for _, k in draws], axis=0)
-                bins = np.array([_bins(k) for _, k in draws])
+                mean = np.mean([_steps(k) for _, k, _ in draws], axis=0)
+                bins = np.array([_bins(k) for _, k, _ in draws])
+                ends = np.mean([e for _, _, e in draws], axis=0)
                 plain = _ranked(mean, keys)
-                expect = _ranked(mean, keys, (bins.min(0), bins.mean(0))) if ties == "draws" else plain
+                expect = {"map": plain, "draws": _ranked(mean, keys, (bins.min(0), bins.mean(0))),
+                          "options": _ranked(mean, keys, (bins.min(0), bins.mean(0)), ends)}[ties]
                 decisions.append(choice == expect[0] and np.array_equal(ranked, expect[1]))
                 alone.append(not planner.doubtful.any())
                 broken.append(expect[0] != plain[0])
@@ -295,13 +298,15 @@ def test_the_disc_planner_draws_its_tracked_walkers_speeds_around_their_tracks()
     actions = [run_episode(checked(0.05), sim, s).actions for s in seeds]
     assert decisions and all(decisions) and any(alone) and any(broken)
     decisions.clear()
-    for s in seeds:
-        run_episode(checked(0.05, "map"), sim, s)
-    assert decisions and all(decisions)
+    for ties in ("map", "options"):
+        for s in seeds:
+            run_episode(checked(0.05, ties), sim, s)
+        assert decisions and all(decisions)
+        decisions.clear()
     assert len(errors) > 100 and np.std(errors) == pytest.approx(0.05, rel=0.25)
     assert abs(np.mean(errors)) < 0.02
     again = [run_episode(make_planner("discs", config=profile.sim, profile=profile, samples=samples,
-                                      speed_sigma=0.05), sim, s).actions for s in seeds]
+                                      speed_sigma=0.05, ties="draws"), sim, s).actions for s in seeds]
     assert again == actions  # the same draws
     errors.clear()
     for s in seeds:
@@ -359,3 +364,28 @@ def test_ties_of_the_draws_mean_go_to_the_most_clearance_in_the_worst_draw_then_
     assert np.argsort(-ranked[:4], kind="stable").tolist() == [2, 3, 0, 1]
     mean[1] = 4.53125  # one draw of 32 more safe steps outranks any clearance
     assert _ranked(mean, keys, (least, average))[0] == 1
+
+
+def test_options_count_the_horizon_end_states_each_first_primitive_still_reaches():
+    """``reachable_ends``: per first primitive, the states at the lattice's last step that its safe edges
+    lead to (0 where it touches at once, or where every way from it is cut); ``_ranked`` with options
+    breaks ties of the mean and of the clearance bins by the most options, before the map's own rank."""
+    from husky_course.planners.tracking import _ranked, reachable_ends
+    from husky_course.sim.lattice import Lattice
+
+    t, f = True, False
+    one = Lattice(np.zeros(3), [np.array([0]), np.arange(3)], [np.array([[t, f, t]])],
+                  [np.zeros((1, 3))], [np.array([[0, 1, 2]])])
+    assert reachable_ends(one).tolist() == [1.0, 0.0, 1.0]
+    two = Lattice(np.zeros(3), [np.array([0]), np.arange(3), np.arange(4)],
+                  [np.array([[t, t, f]]), np.array([[t, f, t], [f, f, f], [t, t, t]])],
+                  [np.zeros((1, 3)), np.zeros((3, 3))],
+                  [np.array([[0, 1, 2]]), np.array([[0, 1, 2], [0, 0, 0], [1, 2, 3]])])
+    assert reachable_ends(two).tolist() == [2.0, 0.0, 0.0]  # 1 leads to a dead end, 2 touches at once
+    cut = Lattice(two.pose, [*two.states[:2], np.zeros(0, int)], [two.feasible[0], np.zeros((3, 3), bool)],
+                  two.clear, two.nxt)
+    assert reachable_ends(cut).tolist() == [0.0, 0.0, 0.0]  # nothing lasts to the last step
+    keys = np.array([5_010_000.0, 5_015_000.0, 5_012_000.0, 5_012_000.0])
+    mean, least, average = np.full(4, 4.5), np.array([3.0, 3.0, 3.0, 2.0]), np.full(4, 7.0)
+    assert _ranked(mean, keys, (least, average))[0] == 1  # the map's rank
+    assert _ranked(mean, keys, (least, average), np.array([4.0, 2.0, 5.0, 9.0]))[0] == 2  # most options

@@ -243,7 +243,8 @@ class ArrivalsConfig:
     #: how the disc planner breaks ties of the draws' mean safe steps (``TrackingPlanner._decide``): "map",
     #: by the rank of its map's own velocities (clearance bins, then lateral cost, then the lowest index);
     #: "draws", by the draws' clearance bins, the fewest over the draws first, then their mean, then as
-    #: "map". Most decisions tie at the top. Judged from the same states (``benchmarks/exp_moving_ties.py``,
+    #: "map"; "options", as "draws" but before the map's rank the most options (below). Most decisions tie
+    #: at the top. Judged from the same states (``benchmarks/exp_moving_ties.py``,
     #: full profile, "map" driving): fatal choices 148 -> 136 on tuning worlds 0-999 (17 / 29) and 438 ->
     #: 384 on 3,000 worlds of collection 6 (25 / 79, p < 0.001); the draws' mean bins alone, 141 / 391; a
     #: network trained to break the ties (1,000 worlds of collection 6), 143. Episodes on tuning worlds
@@ -258,8 +259,12 @@ class ArrivalsConfig:
     #: states at its last step, the mean over the draws), before the draws' clearance bins, 0.771 (49 / 124),
     #: after them (in place of the map's own rank), 0.857 / 0.878 / 0.842 on worlds 1,000-1,999 / 2,000-2,999
     #: / 3,000-3,999 against 0.846 / 0.875 / 0.840 (33 / 22, 31 / 28, 39 / 37; pooled 103 / 87, p = 0.28):
-    #: half a point three slices cannot establish, as the mirrored tie-break's two points could not
-    ties: str = "draws"
+    #: half a point three slices could not establish. Two more slices, named before they ran as the test of
+    #: that rule alone (worlds 4,000-4,999 / 5,000-5,999, used for nothing before): 0.845 / 0.867 against
+    #: 0.833 / 0.846 (37 / 25, 41 / 20; together 78 / 45, p = 0.004). Hence "options": the draws' fewest
+    #: clearance bins, then their mean, then the most options, then the map's own rank (all five slices:
+    #: 0.858 against 0.848, 181 / 132, p = 0.007)
+    ties: str = "options"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
     #: of the tuning set (55 / 44, p = 0.31), at about five times the time per decision

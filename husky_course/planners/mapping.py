@@ -42,7 +42,7 @@ import hashlib
 import numpy as np
 
 from ..config import MappingConfig, OracleConfig, SimConfig
-from ..sim.lattice import EdgeCheck, Lattice, StartCheck, expand_from_starts, rank_plans
+from ..sim.lattice import EdgeCheck, Lattice, Ranking, StartCheck, expand_from_starts, rank_plans
 from ..sim.primitives import PrimitiveLibrary
 from .base import EpisodeStart, Planner
 from .perception import DepthScan, EgoMap
@@ -295,10 +295,15 @@ class MappingPlanner(Planner):
         self.map.add(obs)
         return self._decide(max(1, min(self.horizon, self._remaining)))
 
+    def _ranking(self, horizon: int) -> tuple[Lattice, Ranking]:
+        """The map's lattice, ``horizon`` steps from the robot, and its plans' ranking."""
+        assert self._library is not None
+        lattice = self._search(horizon)
+        return lattice, rank_plans(lattice, np.abs(self._library.offsets), self.cap, self.quantum)
+
     def _decide(self, horizon: int) -> tuple[int, np.ndarray]:
         """The best first primitive of the map's lattice and every first primitive's rank."""
-        assert self._library is not None
-        ranking = rank_plans(self._search(horizon), np.abs(self._library.offsets), self.cap, self.quantum)
+        ranking = self._ranking(horizon)[1]
         return int(ranking.choice[0][0]), ranking.keys[0][0]
 
     def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:

@@ -9,7 +9,8 @@ the network's disc centre, not a fitted circle), a first sight's by the earlier 
 tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its walking points, over
 draws of what it doubts: the undecided first sights' walks and the tracked walkers' speeds
 (:class:`~husky_course.config.ArrivalsConfig`'s ``samples`` and ``speed_sigma``), its ties going to the
-plan that keeps the most clearance in the worst draw (``ties``).
+plan that keeps the most clearance in the worst draw, then to the first primitive whose safe plans still
+reach the most places at the horizon's end (its *options*, ``ties``).
 The measurements behind each choice are in :mod:`~husky_course.planners.discs`,
 :mod:`~husky_course.planners.arrivals` and :class:`~husky_course.config.WallsConfig`.
 """

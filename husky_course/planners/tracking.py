@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import ArrivalsConfig, MappingConfig, SimConfig, WallsConfig
-from ..sim.lattice import StartCheck
+from ..sim.lattice import Lattice, StartCheck
 from ..sim.world import sample_times
 from .mapping import MappingPlanner
 from .motion import WalkingMap
@@ -176,9 +176,11 @@ class TrackingPlanner(MappingPlanner):
           model over the walks no earlier column saw through). Each of ``samples`` draws gives every
           one of them a walk, and every walker its track follows (:attr:`tracked`) its track's speed
           plus a normal error of spread ``speed_sigma``; the first primitive whose plans survive the
-          most steps on average over the draws wins, ties going to the rank of the map's own
-          velocities. Drawn from the episode's number and the decision's; with neither kind of doubt
-          present, the map's own choice.
+          most steps on average over the draws wins, ties broken as ``ties`` says (:class:`Tally`: by
+          the rank of the map's own velocities; or by the draws' clearance first; or by that and then
+          the draws' options, :func:`reachable_ends`). Drawn from the episode's number and the
+          decision's; with neither kind of doubt present, the map's own choice (with ``ties``
+          "options", ties of its safe steps and clearance go to its options).
         * ``first_samples``: the first decision has one image, so every cylinder in view is a first
           sight the arrivals rule cannot judge. Each of ``first_samples`` samples draws, for every
           doubtful piece on its own (points closer than 0.3 m to one another: one disc, or one
@@ -196,7 +198,8 @@ class TrackingPlanner(MappingPlanner):
 
     def _decide_over_draws(self, horizon: int) -> tuple[int, np.ndarray]:
         """:meth:`_decide`'s work."""
-        choice, keys = MappingPlanner._decide(self, horizon)
+        lattice, ranking = self._ranking(horizon)
+        choice, keys = int(ranking.choice[0][0]), ranking.keys[0][0]
         walks = float(getattr(self.config.world, "moving_fraction", 0.0))
         if not walks:
             return choice, keys
@@ -204,9 +207,8 @@ class TrackingPlanner(MappingPlanner):
         tracked = self.tracked if self.samples and self.speed_sigma > 0 else np.zeros(0, bool)
         if len(weights) or tracked.any():
             rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
-            total, base, k = np.zeros(len(keys)), self.velocity, int(tracked.sum())
+            tally, base, k = Tally(self.ties, keys), self.velocity, int(tracked.sum())
             drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
-            least, clear = np.full(len(keys), np.inf), np.zeros(len(keys))
             for _ in range(self.samples):
                 speeds = base.copy()
                 if drawn_ones is not None:  # the undecided first sights
@@ -214,16 +216,11 @@ class TrackingPlanner(MappingPlanner):
                     speeds = np.where(drawn_ones, drawn[np.maximum(group, 0)], speeds)
                 if k:
                     speeds[tracked] += rng.normal(0.0, self.speed_sigma, k)
-                drawn_keys = self._keys_if(horizon, speeds)
-                total += _steps(drawn_keys)
-                bins = _bins(drawn_keys)
-                least, clear = np.minimum(least, bins), clear + bins
-            if self.ties == "draws":
-                return _ranked(total / self.samples, keys, (least, clear / self.samples))
-            return _ranked(total / self.samples, keys)
+                tally.add(self._keys_if(horizon, speeds), self._drawn)
+            return tally.ranked()
         doubtful = self.doubtful
         if not doubtful.any():
-            return choice, keys
+            return Tally.undrawn(self.ties, choice, keys, lattice)
         lo, hi = self.config.world.speed_range  # type: ignore[attr-defined]
         if self.first_samples and self._remaining == self._length:
             rng, piece = np.random.default_rng(self._key), _pieces(self.points[doubtful])
@@ -235,7 +232,7 @@ class TrackingPlanner(MappingPlanner):
                 total += self._hypothesis(horizon, speed)
             return _ranked(total / self.first_samples, keys)
         if not self.hedge:
-            return choice, keys
+            return Tally.undrawn(self.ties, choice, keys, lattice)
         expected = (1 - walks) * _steps(keys)
         for speed in (-(lo + hi) / 2, (lo + hi) / 2):
             expected = expected + walks / 2 * self._hypothesis(horizon, speed)
@@ -254,12 +251,68 @@ class TrackingPlanner(MappingPlanner):
 
     def _keys_if(self, horizon: int, speeds: np.ndarray) -> np.ndarray:
         """Each first primitive's rank (:func:`~husky_course.sim.lattice.rank_plans`' keys) if the
-        map's points walk at ``speeds`` (one per point of :attr:`points`)."""
+        map's points walk at ``speeds`` (one per point of :attr:`points`); the lattice they rank is
+        kept in ``_drawn`` (for the draws' options, :class:`Tally`)."""
         self._speeds = speeds
         try:
-            return MappingPlanner._decide(self, horizon)[1]
+            self._drawn, ranking = self._ranking(horizon)
+            return ranking.keys[0][0]
         finally:
             self._speeds = None
+
+
+class Tally:
+    """What :meth:`TrackingPlanner._decide`'s draws add up, per first primitive: the safe steps of its best
+    plan, its clearance bins (the fewest over the draws and their sum) and, with ``ties`` "options", its
+    options (:func:`reachable_ends`); :meth:`ranked` ranks by them as ``ties`` says (:func:`_ranked`)."""
+
+    def __init__(self, ties: str, keys: np.ndarray) -> None:
+        self.ties, self.keys, self.n = ties, keys, 0
+        self.steps, self.clear, self.ends = np.zeros(len(keys)), np.zeros(len(keys)), np.zeros(len(keys))
+        self.least = np.full(len(keys), np.inf)
+
+    def add(self, keys: np.ndarray, lattice: Lattice) -> None:
+        """One draw's keys (:meth:`TrackingPlanner._keys_if`) and the lattice they rank (its ``_drawn``)."""
+        bins = _bins(keys)
+        self.n, self.steps, self.clear = self.n + 1, self.steps + _steps(keys), self.clear + bins
+        self.least = np.minimum(self.least, bins)
+        if self.ties == "options":
+            self.ends += reachable_ends(lattice)
+
+    def ranked(self) -> tuple[int, np.ndarray]:
+        """The choice and every first primitive's rank over the draws added."""
+        if self.ties == "map":
+            return _ranked(self.steps / self.n, self.keys)
+        return _ranked(self.steps / self.n, self.keys, (self.least, self.clear / self.n),
+                       self.ends / self.n if self.ties == "options" else None)
+
+    @staticmethod
+    def undrawn(ties: str, choice: int, keys: np.ndarray, lattice: Lattice) -> tuple[int, np.ndarray]:
+        """Nothing drawn: the map's own ``choice`` and ``keys``; with ``ties`` "options", its plans' safe
+        steps and bins, then the lattice's options, then the keys."""
+        if ties != "options":
+            return choice, keys
+        bins = _bins(keys)
+        return _ranked(_steps(keys), keys, (bins, bins), reachable_ends(lattice))
+
+
+def reachable_ends(lattice: Lattice) -> np.ndarray:
+    """Per first primitive from the lattice's start: how many of its states at the last step the safe
+    edges still lead to after it (its *options*; 0 where it touches at once, or nothing lasts)."""
+    last = len(lattice.feasible)
+    first, after = lattice.feasible[0][0], lattice.nxt[0][0]
+    if last == 0 or not len(lattice.states[last]):
+        return np.zeros(len(first))
+    reach = np.eye(len(lattice.states[last]), dtype=bool)  # (states at step k, states at the last)
+    for k in range(last - 1, 0, -1):  # back to the states after the first primitive
+        feasible, nxt = lattice.feasible[k], np.minimum(lattice.nxt[k], len(reach) - 1)
+        earlier = np.zeros((len(lattice.states[k]), reach.shape[1]), bool)
+        for m in range(feasible.shape[1]):
+            earlier |= feasible[:, m, None] & reach[nxt[:, m]]
+        reach = earlier
+    if not len(reach):
+        return np.zeros(len(first))
+    return np.where(first, reach[np.minimum(after, len(reach) - 1)].sum(1), 0).astype(float)
 
 
 def _steps(keys: np.ndarray) -> np.ndarray:
@@ -274,15 +327,17 @@ def _bins(keys: np.ndarray) -> np.ndarray:
     return np.where(keys > -1e8, np.round((keys - _steps(keys) * 1e6) / 1e3), -1.0)
 
 
-def _ranked(mean: np.ndarray, keys: np.ndarray,
-            clearance: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[int, np.ndarray]:
+def _ranked(mean: np.ndarray, keys: np.ndarray, clearance: tuple[np.ndarray, np.ndarray] | None = None,
+            options: np.ndarray | None = None) -> tuple[int, np.ndarray]:
     """The first primitive with the most mean safe steps ``mean`` over draws, ties to ``keys``' rank;
     with ``clearance`` ``(least, mean)`` (the draws' clearance bins: the fewest and the mean over the
-    draws), ties to the most of the fewest, then of the mean, then to ``keys``' rank."""
+    draws), ties to the most of the fewest, then of the mean, then (with ``options``, the mean over the
+    draws of :func:`reachable_ends`) to the most options, then to ``keys``' rank."""
     mean, within = np.round(mean, 6), keys
     if clearance is not None:  # each primitive's place in that order, below 100 (1e-6 of a mean step)
         last = -np.arange(len(keys))  # full ties to the lowest index, as argmax breaks them
-        order = np.lexsort((last, keys, np.round(clearance[1], 6), clearance[0], mean))  # the last first
+        more = np.round(options, 6) if options is not None else np.zeros(len(keys))
+        order = np.lexsort((last, keys, more, np.round(clearance[1], 6), clearance[0], mean))  # last first
         within = np.empty(len(keys))
         within[order] = np.arange(len(keys)) * (100.0 / len(keys))
     ranked = np.where(keys > -1e8, mean * 1e8 + within, keys)
@@ -305,8 +360,8 @@ def _pieces(points: np.ndarray, gap: float = 0.3) -> np.ndarray:
 def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, hedge: bool,
                first_samples: int, samples: int, speed_sigma: float, ties: str = "map") -> None:
     """The settings for what a planner doubts of its map's motion (:class:`ArrivalsConfig`)."""
-    if ties not in ("map", "draws"):
-        raise ValueError(f"ties must be 'map' or 'draws', got {ties!r}")
+    if ties not in ("map", "draws", "options"):
+        raise ValueError(f"ties must be 'map', 'draws' or 'options', got {ties!r}")
     planner.ties = ties
     planner.doubt_steps, planner.doubt_hard, planner.hedge = float(doubt_steps), bool(doubt_hard), bool(hedge)
     for name, value in (("first_samples", first_samples), ("samples", samples)):
@@ -318,3 +373,4 @@ def _set_doubt(planner: TrackingPlanner, doubt_steps: float, doubt_hard: bool, h
     planner.speed_sigma = float(speed_sigma)
     planner.max_walk = float(getattr(planner.config.world, "speed_range", (0.0, 0.0))[1])
     planner._speeds: np.ndarray | None = None
+    planner._drawn: Lattice | None = None  #: the lattice of the last draw (:meth:`TrackingPlanner._keys_if`)
