@@ -9,8 +9,10 @@ planner as it is (a paired comparison): ``exp_moving_memory.py`` its map told th
 (privileged), ``exp_moving_lost.py`` rules of its map's memory, ``exp_moving_doubt_memory.py`` what its
 draws doubt. Their episodes all run here (:func:`paired_episodes`), and this script runs any of them side
 by side, named ``SCRIPT:VARIANT`` (:data:`SCRIPTS`): ``memory:el``, ``lost:keep:0.15``,
-``doubt:evidence+aged``. Each prints its success rate with the exact 95% interval and the worlds won
-only with it / only without it, with an exact two-sided sign test.
+``doubt:evidence+aged``; and ``settings:KEY=VALUE[,KEY=VALUE]``, the disc planner built with other settings
+(``exp_moving_paired.py``'s variants: ``settings:ties='draws'`` is the planner before its options
+tie-break, ``ArrivalsConfig.ties``). Each prints its success rate with the exact 95% interval and the
+worlds won only with it / only without it, with an exact two-sided sign test.
 
 The planner as it is runs first, on worlds ``start`` to ``start + worlds - 1`` of evaluation set ``seed``
 (1: the tuning set). With ``--base F.npz`` its successes are kept in ``F``, under a key of everything
@@ -51,6 +53,7 @@ SCRIPTS = {
     "memory": ("exp_moving_memory", "told", "(told nothing)"),
     "lost": ("exp_moving_lost", "wired", "nothing"),
     "doubt": ("exp_moving_doubt_memory", "doubting_planner", "nothing doubted"),
+    "settings": ("exp_moving_paired", "variant_planner", ""),
 }
 BASE_HELP = ("a .npz file of the planner's own episodes: read when its key matches (the same code, configs, "
              "networks and worlds), else run and written")

@@ -121,11 +121,12 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_variants.py": (  # each script's variant that changes nothing must win the planner's worlds
         ["--profile", "quick", "--worlds", "2", "--workers", "1", "--check", "--base", "{tmp}/base.npz",
-         "--variants", "memory:e", "lost:keep:0.15", "doubt:aged"],
+         "--variants", "memory:e", "lost:keep:0.15", "doubt:aged", "settings:ties='draws'"],
         rf"episodes, worlds 1000-1001 of {TUNING} \(tuning\), moving course, quick profile:\n"
         r" +\(as it is\) +\d\.\d{3} \[[\s\S]*\n +memory:e +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}"
         r"[\s\S]*\n +lost:keep:0\.15 +\d\.\d{3} \[[\s\S]*\n +doubt:aged +\d\.\d{3} \["
-        r"[\s\S]*\nchecked: 3 variants that change nothing won exactly the planner's worlds",
+        r"[\s\S]*\n +settings:ties='draws' +\d\.\d{3} \["
+        r"[\s\S]*\nchecked: 4 variants that change nothing won exactly the planner's worlds",
     ),
     "exp_moving_first_decision.py": (
         ["--profile", "quick", "--worlds", "2", "--draws", "1", "--workers", "1"],
