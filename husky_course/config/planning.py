@@ -263,7 +263,21 @@ class ArrivalsConfig:
     #: that rule alone (worlds 4,000-4,999 / 5,000-5,999, used for nothing before): 0.845 / 0.867 against
     #: 0.833 / 0.846 (37 / 25, 41 / 20; together 78 / 45, p = 0.004). Hence "options": the draws' fewest
     #: clearance bins, then their mean, then the most options, then the map's own rank (all five slices:
-    #: 0.858 against 0.848, 181 / 132, p = 0.007)
+    #: 0.858 against 0.848, 181 / 132, p = 0.007; a sixth, 6,000-6,999, run after it landed: 0.857 against
+    #: 0.845, 30 / 18). Tried since, throwaway variants of ``Tally`` beside "options" (episodes, full profile;
+    #: tuning worlds 7,000-7,999, used for nothing before, where "options" crossed 0.838, and 8,000-8,999,
+    #: 0.862; won only with / only without): options before the clearance bins, again, 0.790 (56 / 104); the
+    #: fewest options over the draws in place of their mean, 0.846 / 0.862 (26 / 18, 16 / 16); options
+    #: counted at every step of the horizon (the states on each first primitive's safe plans, summed over
+    #: its steps), 0.846 / 0.863 (33 / 25, 21 / 20), their fewest over the draws 0.865 (25 / 22) on
+    #: 8,000-8,999; the draws' mean safe steps floored to eighths before the clearance, 0.837 (1 / 2) on
+    #: 7,000-7,999. None is a gain two slices show. The draws' clearance bins ranked first by a quantile
+    #: over the draws in place of their fewest (the lower value; with 32 draws 0.1 is the fourth fewest,
+    #: 0.25 the eighth: one narrow draw no longer decides): 0.1, 0.851 / 0.869 / 0.838 on 7,000 / 8,000 /
+    #: 9,000 (25 / 12, 17 / 10, 15 / 21: the last two, named as its test, 32 / 31); 0.25,
+    #: 0.847 / 0.875 (24 / 15, 20 / 7), then on 9,000 / 10,000 (0.844 / 0.837), named as its test before
+    #: they ran, 0.843 / 0.849 (13 / 14, 23 / 11; together 36 / 25, p = 0.20): pointing the same way, not
+    #: shown; more slices named before they run would decide it
     ties: str = "options"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
