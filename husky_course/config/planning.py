@@ -276,8 +276,10 @@ class ArrivalsConfig:
     #: 0.25 the eighth: one narrow draw no longer decides): 0.1, 0.851 / 0.869 / 0.838 on 7,000 / 8,000 /
     #: 9,000 (25 / 12, 17 / 10, 15 / 21: the last two, named as its test, 32 / 31); 0.25,
     #: 0.847 / 0.875 (24 / 15, 20 / 7), then on 9,000 / 10,000 (0.844 / 0.837), named as its test before
-    #: they ran, 0.843 / 0.849 (13 / 14, 23 / 11; together 36 / 25, p = 0.20): pointing the same way, not
-    #: shown; more slices named before they run would decide it
+    #: they ran, 0.843 / 0.849 (13 / 14, 23 / 11; together 36 / 25, p = 0.20), then on 11,000 / 12,000
+    #: (0.855 / 0.852), also named as its test before they ran, 0.844 / 0.853 (15 / 26, 17 / 16): on the
+    #: four test slices 68 / 67 (p = 1.0), 0.847 against 0.847. Dropped: what the tie-break still holds,
+    #: if anything, is below what 4,000 worlds can show
     ties: str = "options"
     #: the tracker's ``speed_sigma``. Off, with its ``samples``: with 32 draws and 0.05 (each walking
     #: scan point's error drawn on its own, not per piece) it crossed 0.752 against 0.741 on worlds 0-999
