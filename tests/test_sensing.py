@@ -8,10 +8,10 @@ import json
 import subprocess
 import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
+from before_sensing import RECORD, play
 
 from husky_course.config import (
     SENSING,
@@ -33,37 +33,13 @@ from husky_course.sim.sensing import depth_edges, executed_local_path, executed_
 REALISTIC = SENSING["realistic"]
 CAMERA = CameraConfig()
 
-#: What the simulator showed and did before sensing existed (commit fc4c264): depth images, played-back
-#: paths and collisions of 4 worlds x 3 steps on both backends and courses, recorded by
-#: ``tests/data/record_before_sensing.py`` (how to rerun it: its docstring).
-BEFORE_SENSING = Path(__file__).parent / "data" / "before_sensing.npz"
-#: Tolerances against that record. The last bits of numpy's float64 sin and cos depend on the
-#: processor: with AVX-512 numpy uses its own vectorised versions, without it the C library's
-#: (numpy issue 23523). Digests recorded on an AVX-512 machine failed on an AVX2 one with the same
-#: code, fc4c264's included. A pose 1e-16 off moves a depth pixel by far less than 1e-6, while the
-#: two backends' renderers differ by up to 1.3e-5 (the test checks it can tell them apart).
+#: Tolerances against :data:`before_sensing.RECORD`, fc4c264's depth images, paths and collisions. The
+#: last bits of numpy's float64 sin and cos depend on the processor: with AVX-512 numpy uses its own
+#: vectorised versions, without it the C library's (numpy issue 23523). Digests recorded on an AVX-512
+#: machine failed on an AVX2 one with the same code, fc4c264's included. A pose 1e-16 off moves a depth
+#: pixel by far less than 1e-6, while the two backends' renderers differ by up to 1.3e-5 (the test checks
+#: it can tell them apart).
 PATH_ATOL, DEPTH_ATOL = 1e-9, 1e-6
-
-
-def walk(sim) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Depth images, paths and collisions of the recorded walk (same worlds, poses, primitives), and
-    on the way: ideal senses report the renderer's images and the library's paths, bit for bit."""
-    rng = np.random.default_rng(0)
-    depth, paths, collided = [], [], []
-    for seed in range(4):
-        pose = sim.load(seed).start.copy()
-        for step in range(3):
-            image = sim.depth(pose[None], step)
-            assert image.tobytes() == sim._depth(pose[None], step).tobytes()
-            index = int(rng.integers(25))
-            r = sim.apply(pose, index, step)
-            assert r.path.tobytes() == sim.library.path_from(pose, index).tobytes()
-            assert r.path.tobytes() == sim.play(pose, index, step).path.tobytes()
-            depth.append(image[0])
-            paths.append(r.path)
-            collided.append(r.collided)
-            pose = r.pose
-    return np.stack(depth), np.stack(paths), np.array(collided)
 
 
 @pytest.mark.parametrize("kind", ["static", "moving"])
@@ -73,10 +49,17 @@ def test_ideal_senses_are_the_simulator_before_sensing(kind, backend):
     record to within the processor's rounding (:data:`PATH_ATOL`, :data:`DEPTH_ATOL`)."""
     from husky_course.sim.backends import make_simulator
 
+    def bit_for_bit(pose: np.ndarray, index: int, step: int) -> None:
+        """Ideal senses report the renderer's images and the library's paths, on any machine."""
+        assert sim.depth(pose[None], step).tobytes() == sim._depth(pose[None], step).tobytes()
+        path = sim.apply(pose, index, step).path.tobytes()
+        assert path == sim.library.path_from(pose, index).tobytes()
+        assert path == sim.play(pose, index, step).path.tobytes()
+
     with make_simulator(backend, sim_for_world(SimConfig(), kind)) as sim:
         assert sim.config.sensing == get_sensing("ideal")
-        depth, paths, collided = walk(sim)
-    with np.load(BEFORE_SENSING, allow_pickle=False) as before:
+        depth, paths, collided = play(sim, bit_for_bit)
+    with np.load(RECORD, allow_pickle=False) as before:
         np.testing.assert_array_equal(collided, before[f"{kind}_collided"])
         np.testing.assert_allclose(paths, before[f"{kind}_path"], rtol=0, atol=PATH_ATOL)
         np.testing.assert_allclose(depth, before[f"{kind}_{backend}_depth"], rtol=0, atol=DEPTH_ATOL)
