@@ -1,7 +1,8 @@
 """Experiment: a network that reads a tracked cylinder's speed, against the tracks' own judging.
 
 Run: ``python benchmarks/exp_moving_speed_reader.py [--profile full] [--worlds 1500] [--episodes 1000]
-[--episodes-start 1000] [--workers 2]`` (the disc planner needs its network: ``python -m husky_course
+[--episodes-start 1000] [--variants speeds draws standing columns] [--readers R.pt] [--base B.npz]
+[--workers 2]`` (the disc planner needs its network: ``python -m husky_course
 train discs``).
 
 Why: told the true motion of its *tracked* discs alone (those seen by two images or more; not the first
@@ -30,6 +31,12 @@ place). With three looks the share is 3%, with four 1.5%.
    two-look discs' speeds read by the reader with the columns (its most likely bin); ``draws``, in each
    of the planner's draws (``ArrivalsConfig.samples``) every tracked disc's speed drawn from the
    looks' reader's probabilities, in place of the tracked walkers' normal error (``speed_sigma``).
+   ``--variants`` may also name ``standing``: only the tracked discs the tracks *read standing* drawn from
+   the reader with the columns (a walk in the share of draws its chance of walking gives; the tracked
+   walkers keep their normal error); and ``columns``: ``draws`` with the reader with the columns. The
+   readers' chances for the discs read standing are printed against the truth (their calibration).
+   ``--readers F`` keeps the trained readers in ``F`` (read instead of trained when it exists), and
+   ``--base F`` the planner's own episodes (as ``exp_moving_variants.py`` keeps them).
 
 Measured (full profile): see :data:`MEASURED`.
 Its figures were measured before the planner broke the last ties by its draws' options
@@ -39,16 +46,17 @@ Its figures were measured before the planner broke the last ties by its draws' o
 from __future__ import annotations
 
 import argparse
+import tempfile
 import types
+from pathlib import Path
 
 import numpy as np
 import torch
+from exp_moving_variants import BASE_HELP, paired_episodes, tuning_worlds
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.course.diagnosis import sign_test
 from husky_course.data.collect import world_seed_for
 from husky_course.engines import map_tasks
-from husky_course.evaluation.episodes import eval_world_seeds, run_episode
 from husky_course.evaluation.rollout import Rollout
 from husky_course.planners import tracking
 from husky_course.planners.reference import ON_CYLINDER, truth_in_frame
@@ -59,6 +67,10 @@ COLLECTION = 7  #: training worlds' collection seed (0-6 are taken)
 LOOKS = 4  #: the looks a track keeps (``TrackingConfig.looks``)
 WIDTH = 1 + 4 * LOOKS + 6  #: a row's columns before the evidence: looks, judged, slope, disc, gap
 VARIANTS = ("speeds", "draws")
+#: variants ``--variants`` may also name: ``standing``, the tracked discs *read standing* drawn from the
+#: reader with the columns (the tracked walkers keep ``speed_sigma``); ``columns``, every two-look-or-more
+#: disc drawn from it (``draws`` with the columns' reader)
+MORE = ("standing", "columns")
 MEASURED = """
 Full profile, this script's defaults (``--worlds 1500 --episodes 1000``; 21 minutes on 2 cores):
 47,250 tracked sightings, 9,444 of them in the held-out fifth. Off by more than 0.1 m per step there:
@@ -242,19 +254,24 @@ def wire(planner, readers: dict, variant: str, speeds: np.ndarray) -> None:
             if two.any():
                 planner.map.speeds[at[two]] = speeds[probabilities(readers["columns"], x[two]).argmax(1)]
         else:
-            planner.map.read = (probabilities(readers["looks"], x) if len(x) else np.zeros((0, 17))), at
+            reader = readers["looks" if variant == "draws" else "columns"]
+            if variant == "standing":
+                x, at = x[planner.map.speeds[at] == 0], at[planner.map.speeds[at] == 0]
+            planner.map.read = (probabilities(reader, x) if len(x) else np.zeros((0, 17))), at
 
     planner.map.add = read_add
-    if variant == "draws":
+    if variant != "speeds":
         planner._decide_over_draws = types.MethodType(lambda self, h: drawn(self, h, speeds), planner)
 
 
 def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     """``TrackingPlanner._decide_over_draws`` with each read disc's speed drawn from its reader's classes
     (a bin's speed uniform within it) in place of the tracked walkers' normal error."""
+    prob, at = self.map.read
+    if not len(at):
+        return tracking.TrackingPlanner._decide_over_draws(self, horizon)
     keys = tracking.MappingPlanner._decide(self, horizon)[1]
     group, weights = self.map.walk_doubt
-    prob, at = self.map.read
     read = np.zeros(len(self.points), bool)
     read[at] = True
     tracked = self.tracked & ~read
@@ -276,14 +293,26 @@ def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     return tally.ranked()
 
 
-def episodes(args: tuple[Profile, list[int], str, dict]) -> list[bool]:
-    """Success in each of ``seeds``: the disc planner as it is (``base``) or with ``variant``'s reader."""
-    profile, seeds, variant, readers = args
+def reader_planner(profile: Profile, name: str):
+    """The disc planner with ``name``'s reader, ``VARIANT@READERS`` (a file :func:`main`'s ``--readers``
+    wrote); a module-level builder for :func:`exp_moving_variants.paired_episodes`."""
+    variant, _, path = name.partition("@")
     planner = make_planner("discs", config=profile.sim, profile=profile)
-    if variant != "base":
-        wire(planner, readers, variant, bins(profile))
-    sim = FastSimulator(profile.sim)
-    return [run_episode(planner, sim, s, profile.sim.max_primitives).success for s in seeds]
+    wire(planner, load_readers(Path(path)), variant, bins(profile))
+    return planner
+
+
+def save_readers(path: Path, readers: dict) -> None:
+    """Keep the trained readers (plain tensors; read back with ``weights_only=True``)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    torch.save(readers, tmp)
+    tmp.replace(path)  # never half-written
+
+
+def load_readers(path: Path) -> dict:
+    """The readers :func:`save_readers` kept."""
+    return torch.load(path, weights_only=True)
 
 
 def main() -> None:
@@ -294,11 +323,35 @@ def main() -> None:
     parser.add_argument("--episodes-start", type=int, default=1000)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--epochs", type=int, default=60)
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=[*VARIANTS, *MORE])
+    parser.add_argument("--readers", type=Path, help="a file of the trained readers: read if it exists, "
+                        "else the sightings are collected, the readers trained and the file written")
+    parser.add_argument("--base", type=Path, help=BASE_HELP)
     args = parser.parse_args()
     if args.worlds < 5:
         parser.error("--worlds needs at least 5 (a fifth is held out)")
     profile = with_world(get_profile(args.profile), "moving")
     speeds = bins(profile)
+    if args.readers is not None and args.readers.exists():
+        readers = load_readers(args.readers)
+        print(f"the readers: read from {args.readers}")
+    else:
+        readers = train_readers(profile, speeds, args)
+        if args.readers is not None:
+            save_readers(args.readers, readers)
+    if not args.episodes:
+        return
+    worlds = tuning_worlds(args.episodes_start, args.episodes, args.profile)
+    if args.readers is None:
+        args.readers = Path(tempfile.mkdtemp()) / "readers.pt"
+        save_readers(args.readers, readers)
+    paired_episodes(reader_planner, [f"{v}@{args.readers}" for v in args.variants], profile, worlds,
+                    args.workers, args.base)
+
+
+def train_readers(profile: Profile, speeds: np.ndarray, args: argparse.Namespace) -> dict:
+    """Collect the sightings of ``args.worlds`` training worlds, print the readers' errors on a held-out
+    fifth, and return both readers retrained on every world (module docstring, 1-2)."""
     seeds = [world_seed_for(COLLECTION, i) for i in range(args.worlds)]
     parts = map_tasks(sightings, [(profile, seeds[i : i + 10]) for i in range(0, len(seeds), 10)],
                       workers=args.workers, desc="sightings", unit="10 worlds")
@@ -308,27 +361,29 @@ def main() -> None:
           f"profile): {len(x)} tracked sightings, {int(held.sum())} of them in the held-out fifth")
     judged = errors(x[held, 17], y[held], x[held, 0])
     print(f"  off by more than 0.1 m per step, the tracks' judging: {judged}")
+    standing = held & (x[:, 17] == 0)
     readers = {}
     for name, columns in (("looks", False), ("columns", True)):
         r = learn(x[~held], y[~held], speeds, columns, epochs=args.epochs)
-        v = speeds[probabilities(r, x[held]).argmax(1)] if held.any() else np.zeros(0)
+        p = probabilities(r, x[held]) if held.any() else np.zeros((0, 17))
+        v = speeds[p.argmax(1)] if held.any() else np.zeros(0)
         print(f"  the reader of the {name:7s}: {errors(v, y[held], x[held, 0])}")
+        if standing.any():
+            print(f"    {calibration(probabilities(r, x[standing]), y[standing])}")
         readers[name] = learn(x, y, speeds, columns, epochs=args.epochs)
-    if not args.episodes:
-        return
-    tuning = [int(s) for s in eval_world_seeds(args.episodes_start + args.episodes, 1)[args.episodes_start:]]
-    won = {}
-    for variant in ("base", *VARIANTS):
-        tasks = [(profile, tuning[i : i + 10], variant, readers) for i in range(0, len(tuning), 10)]
-        won[variant] = np.array([s for part in map_tasks(episodes, tasks, workers=args.workers, desc=variant)
-                                 for s in part])
-    last = args.episodes_start + args.episodes - 1
-    print(f"episodes on tuning worlds {args.episodes_start}-{last} (evaluation set 1): the planner as it is "
-          f"{won['base'].mean():.3f}")
-    for variant in VARIANTS:
-        only, without, p = sign_test(won[variant], won["base"])
-        print(f"  {variant:7s} {won[variant].mean():.3f}  (won only with / only without: {only} / {without}, "
-              f"p = {p:.3f})")
+    return readers
+
+
+def calibration(p: np.ndarray, y: np.ndarray) -> str:
+    """How well the chance of walking a reader gives the discs *read standing* (rows ``p``, their true
+    speeds ``y``) is calibrated: the walkers' share by bins of that chance."""
+    walk, walks = 1 - p[:, 0], np.abs(y) > 1e-9
+    edges = np.array([0, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0001])
+    k = np.digitize(walk, edges) - 1
+    parts = [f"[{edges[i]:.2f}, {min(edges[i + 1], 1):.2f}): {np.sum(k == i)} read, walkers "
+             f"{walks[k == i].mean() if np.any(k == i) else 0:.3f}" for i in range(len(edges) - 1)]
+    return (f"read standing by the tracks: {len(y)}, walkers {walks.mean():.3f}, mean chance given "
+            f"{walk.mean():.3f}; by chance " + "; ".join(parts))
 
 
 if __name__ == "__main__":

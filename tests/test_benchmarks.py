@@ -156,11 +156,14 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*90% of the oracle \(the goal\) +\d\.\d{3}",
     ),
     "exp_moving_speed_reader.py": (
-        ["--profile", "quick", "--worlds", "10", "--episodes", "3", "--workers", "1", "--epochs", "2"],
+        ["--profile", "quick", "--worlds", "10", "--episodes", "3", "--workers", "1", "--epochs", "2",
+         "--variants", "speeds", "standing", "--readers", "{tmp}/readers.pt"],
         r"discs on 10 moving training worlds of collection 7 \(quick profile\): \d+ tracked sightings"
         r"[\s\S]*the tracks' judging: \d\.\d{4}[\s\S]*the reader of the columns: \d\.\d{4}"
-        rf"[\s\S]*episodes on tuning worlds 1000-1002 \({TUNING}\): the planner as it is \d\.\d{{3}}"
-        r"[\s\S]*draws +\d\.\d{3} +\(won only with / only without: \d+ / \d+, p = \d\.\d{3}\)",
+        r"[\s\S]*read standing by the tracks: \d+, walkers \d\.\d{3}, mean chance given \d\.\d{3}"
+        rf"[\s\S]*episodes, worlds 1000-1002 of {TUNING} \(tuning\), moving course, quick profile:\n"
+        r" +\(as it is\) +\d\.\d{3} \[[\s\S]*\n +speeds@\S+readers\.pt +\d\.\d{3} \[.*only without: \d+, p = "
+        r"\d\.\d{3}[\s\S]*\n +standing@\S+ +\d\.\d{3} \[",
     ),
     "exp_moving_start.py": (
         ["--profile", "quick", "--worlds", "3", "--looks", "0,1", "--planners", "tracking"],
