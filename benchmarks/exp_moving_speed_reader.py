@@ -284,8 +284,9 @@ def wire(planner, readers: dict, variant: str, speeds: np.ndarray) -> None:
                 planner.map.speeds[at[two]] = speeds[probabilities(readers["columns"], x[two]).argmax(1)]
         else:
             reader = readers["looks" if variant == "draws" else "columns"]
-            if variant == "standing":
-                x, at = x[planner.map.speeds[at] == 0], at[planner.map.speeds[at] == 0]
+            if variant == "standing":  # only the discs the tracks read standing
+                still = planner.map.speeds[at] == 0
+                x, at = x[still], at[still]
             planner.map.read = (probabilities(reader, x) if len(x) else np.zeros((0, 17))), at
 
     planner.map.add = read_add
@@ -297,7 +298,7 @@ def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     """``TrackingPlanner._decide_over_draws`` with each read disc's speed drawn from its reader's classes
     (a bin's speed uniform within it) in place of the tracked walkers' normal error."""
     prob, at = self.map.read
-    if not len(at):
+    if not len(at):  # nothing read: the planner's own draws (before 8fed14f, ``draws`` drew here too)
         return tracking.TrackingPlanner._decide_over_draws(self, horizon)
     keys = tracking.MappingPlanner._decide(self, horizon)[1]
     group, weights = self.map.walk_doubt
@@ -371,11 +372,13 @@ def main() -> None:
     if not args.episodes:
         return
     worlds = tuning_worlds(args.episodes_start, args.episodes, args.profile)
-    if args.readers is None:
-        args.readers = Path(tempfile.mkdtemp()) / "readers.pt"
-        save_readers(args.readers, readers)
-    paired_episodes(reader_planner, [f"{v}@{args.readers}" for v in args.variants], profile, worlds,
-                    args.workers, args.base)
+    with tempfile.TemporaryDirectory() as scratch:  # the workers read the readers from a file
+        path = args.readers
+        if path is None:
+            path = Path(scratch) / "readers.pt"
+            save_readers(path, readers)
+        paired_episodes(reader_planner, [f"{v}@{path}" for v in args.variants], profile, worlds,
+                        args.workers, args.base)
 
 
 def train_readers(profile: Profile, speeds: np.ndarray, args: argparse.Namespace) -> dict:
@@ -395,10 +398,9 @@ def train_readers(profile: Profile, speeds: np.ndarray, args: argparse.Namespace
     for name, columns in (("looks", False), ("columns", True)):
         r = learn(x[~held], y[~held], speeds, columns, epochs=args.epochs)
         p = probabilities(r, x[held]) if held.any() else np.zeros((0, 17))
-        v = speeds[p.argmax(1)] if held.any() else np.zeros(0)
-        print(f"  the reader of the {name:7s}: {errors(v, y[held], x[held, 0])}")
+        print(f"  the reader of the {name:7s}: {errors(speeds[p.argmax(1)], y[held], x[held, 0])}")
         if standing.any():
-            print(f"    {calibration(probabilities(r, x[standing]), y[standing])}")
+            print(f"    {calibration(p[standing[held]], y[standing])}")
         readers[name] = learn(x, y, speeds, columns, epochs=args.epochs)
     return readers
 
