@@ -385,6 +385,21 @@ def test_options_count_the_horizon_end_states_each_first_primitive_still_reaches
     cut = Lattice(two.pose, [*two.states[:2], np.zeros(0, int)], [two.feasible[0], np.zeros((3, 3), bool)],
                   two.clear, two.nxt)
     assert reachable_ends(cut).tolist() == [0.0, 0.0, 0.0]  # nothing lasts to the last step
+    rng = np.random.default_rng(0)  # random lattices: the same counts as an OR over the primitives
+    for _ in range(50):
+        sizes = [1, *rng.integers(1, 12, int(rng.integers(1, 6)))]
+        feasible = [rng.random((a, 5)) < 0.4 for a in sizes[:-1]]
+        nxt = [rng.integers(0, b + 2, (a, 5)) for a, b in zip(sizes[:-1], sizes[1:], strict=True)]
+        states = [np.arange(n) for n in sizes]
+        lattice = Lattice(np.zeros(3), states, feasible, [0 * f for f in feasible], nxt)
+        reach = np.eye(sizes[-1], dtype=bool)
+        for k in range(len(feasible) - 1, 0, -1):
+            step = np.zeros((sizes[k], sizes[-1]), bool)
+            for m in range(5):
+                step |= feasible[k][:, m, None] & reach[np.minimum(nxt[k][:, m], len(reach) - 1)]
+            reach = step
+        loop = np.where(feasible[0][0], reach[np.minimum(nxt[0][0], len(reach) - 1)].sum(1), 0)
+        assert reachable_ends(lattice).tolist() == loop.astype(float).tolist()
     keys = np.array([5_010_000.0, 5_015_000.0, 5_012_000.0, 5_012_000.0])
     mean, least, average = np.full(4, 4.5), np.array([3.0, 3.0, 3.0, 2.0]), np.full(4, 7.0)
     assert _ranked(mean, keys, (least, average))[0] == 1  # the map's rank
