@@ -47,6 +47,32 @@ def test_piece_centre_locates_a_cylinder():
         assert np.hypot(*(pts.mean(0) - (cx, cy))) > 0.1  # the mean is off by most of a radius
 
 
+def test_piece_centre_fills_its_system_in_place_with_the_same_numbers_as_stacking_it():
+    """Each Gauss-Newton step's system is filled in place; stacked anew at every step (as it once was),
+    the same centres to the bit: the tracks, the disc maps and the artifacts built on them are unchanged."""
+    from husky_course.planners.pieces import piece_centre
+
+    def stacked(p: np.ndarray, camera_x: float, radius: float) -> np.ndarray:
+        mean = p.mean(0)
+        ray = mean - (camera_x, 0.0)
+        c, r = mean + 0.8 * radius * ray / max(float(np.hypot(*ray)), 1e-9), radius
+        for _ in range(8):
+            d = p - c
+            n = np.hypot(d[:, 0], d[:, 1]) + 1e-9
+            jac = np.r_[np.c_[-d / n[:, None], -np.ones(len(p))], np.array([[0.0, 0.0, 1.0]])]
+            step = np.linalg.lstsq(jac, -np.r_[n - r, r - radius], rcond=None)[0]
+            c, r = c + step[:2], float(np.clip(r + step[2], 0.4 * radius, 2.0 * radius))
+        return c
+
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        radius = rng.uniform(0.1, 0.4)
+        pts = _arc((rng.uniform(1.5, 5.0), rng.uniform(-2.0, 2.0)), radius)
+        pts = pts + rng.normal(0.0, 0.01, pts.shape)  # a noisy scan
+        if len(pts) and np.ptp(pts, axis=0).max() <= 1.0:
+            assert piece_centre(pts, 0.3, radius).tobytes() == stacked(pts, 0.3, radius).tobytes()
+
+
 def test_lateral_velocities_from_two_scans():
     """A cylinder that walked 0.4 m across between two scans is estimated to walk 0.4 m per step
     (the columns that hit it differ between the two); standing surfaces at 0; a piece with no match

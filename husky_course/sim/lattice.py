@@ -117,7 +117,9 @@ def disc_check(
                 continue
             if i in movers:  # where it is at each of these samples' times
                 oy = world.obstacle_y(np.array([i]), T[None, cols])[0]  # type: ignore[union-attr]
-            d2 = dx2[None][..., cols] + (Y[..., cols] - oy) ** 2
+            d2 = Y[..., cols] - oy  # squared and summed in place: the same numbers (a sum is exact either
+            np.square(d2, out=d2)  # way round), fewer arrays made
+            d2 += dx2[None][..., cols]
             hit |= (d2 < reach[i] ** 2).any(-1)
             c = np.minimum(c, np.sqrt(d2.min(-1)) - reach[i])
         return hit, c
