@@ -1,7 +1,7 @@
 """Experiment: what the moving disc planner takes as certain that it could doubt instead.
 
 Run: ``python benchmarks/exp_moving_doubt_memory.py [--profile full] [--worlds 2000] [--start 1000]
-[--variants remembered evidence posterior promote aged in-view ghosts] [--workers 2] [--check]
+[--variants remembered evidence posterior promote aged in-view ghosts told] [--workers 2] [--check]
 [--base B.npz]``
 (the disc planner needs its network: ``python -m husky_course train discs``; ``--base``: the planner's own
 episodes kept for the next run, as ``exp_moving_variants.py`` keeps them).
@@ -40,10 +40,12 @@ Arrivals`' hypotheses) from where its disc was last made; every later image rule
 circle one of its columns sees through; the ghost ends when a new disc overlaps a hypothesis still open, when
 none is left open, when it falls behind, or :data:`GHOST_AGE` steps after its disc was made. In each draw
 every ghost stands at one open hypothesis drawn from the course's prior, walking at it (the map's own
-ranking leaves it out). Variants join with
-``+``. Each runs as a planner on the same worlds as the planner as it is; printed: success with its exact
-interval, and the worlds won only with / only without it, with an exact sign test. ``--check`` adds the
-variant with nothing doubted, which must win exactly the worlds the planner as it is wins.
+ranking leaves it out). ``told`` (privileged: :class:`ToldPlanner` has eyes of its own on the world) is
+``ghosts`` with each ghost whose disc belonged to a cylinder put, in every draw, at its open hypothesis
+nearest where that cylinder is now: what a sharp belief over the ghosts' hypotheses could give at most.
+Variants join with ``+``. Each runs as a planner on the same worlds as the planner as it is; printed:
+success with its exact interval, and the worlds won only with / only without it, with an exact sign test.
+``--check`` adds the variant with nothing doubted, which must win exactly the planner's worlds.
 
 Measured (full profile, tuning worlds 1,000-2,999, where the planner as it is crossed 0.858; about 9
 minutes per variant on 2 cores), success and the worlds won only with / only without the variant:
@@ -86,6 +88,13 @@ p = 0.87: nothing. The ghosts are rarely decisive: on worlds 8,000-8,039, 34 wer
 decisions had one, yet the actions of only 1 of the 40 episodes changed. A drawn belief spread over the
 walks no image has ruled out moves the draws' mean little; told exactly where such cylinders are, the planner
 gains (``exp_moving_lost.py``'s ``S``, 14 / 3).
+
+``told``, named before it ran as a size on tuning worlds 7,000-8,999 beside the planner as it is (a throwaway
+prototype, ``told:4``, fingerprint ``28e5ef29ec515817``): 0.836 against 0.838 (won only with / only without:
+1 / 3) and 0.864 against 0.862 (5 / 3); together 6 / 6. Telling every ghost which of its walks is nearest the
+truth moves nothing, so no belief over those hypotheses, learned or not, can pay on its own. What ``S`` gains
+is the cylinder's *place*: its disc was half a metre or more off when it was dropped (``exp_moving_lost.py``),
+and the walks from that place miss where the cylinder is.
 """
 
 from __future__ import annotations
@@ -95,14 +104,18 @@ from pathlib import Path
 
 import exp_moving_variants as variants
 import numpy as np
+from exp_moving_memory import belonging
 
 from husky_course.config import Profile, get_profile, with_world
-from husky_course.planners.moving_discs import WalkingDiscMap
+from husky_course.planners.base import EpisodeStart
+from husky_course.planners.moving_discs import DiscTrackingPlanner, WalkingDiscMap
+from husky_course.planners.reference import truth_in_frame
 from husky_course.planners.registry import make_planner
 from husky_course.planners.tracking import Tally
 from husky_course.planners.walls import bounced, walk_on
+from husky_course.sim.fast import FastSimulator
 
-DOUBTS = ("remembered", "evidence", "posterior", "promote", "aged", "in-view", "ghosts")
+DOUBTS = ("remembered", "evidence", "posterior", "promote", "aged", "in-view", "ghosts", "told")
 NOTHING = "nothing doubted"  #: the variant that must be the planner as it is (``--check``)
 WALK_SHARE = 0.01  #: ``posterior`` draws a track read as standing when its posterior walks more often
 GHOST_AGE = 4  #: ``ghosts``: steps after its disc was last made that a ghost is kept
@@ -120,6 +133,8 @@ class DoubtingMap(WalkingDiscMap):
         self.birth, self.age = np.zeros((0, len(self.arrivals.hypotheses))), np.zeros(0, int)
         self.ghosts: list[dict] = []  #: ``ghosts``: per dropped disc, ``x, r``, hypotheses ``ys, vs, open``
         self.draw: list[int] | None = None  #: a draw's hypothesis per ghost (None: the ghosts left out)
+        self.ids = np.zeros(0, int)  #: ``told``: per disc, the cylinder it belongs to (-1: none)
+        self.truth: tuple[np.ndarray, np.ndarray] = (np.empty((0, 3)), np.empty(0))  #: ``told``: this image's
 
     def add(self, obs: np.ndarray) -> None:  # WalkingDiscMap.add, with the doubts' hooks
         d, cols, pts, pieces = self.pieces(obs)
@@ -157,6 +172,8 @@ class DoubtingMap(WalkingDiscMap):
     def move(self, dx: float, dy: float) -> np.ndarray:
         kept = super().move(dx, dy)
         self.birth, self.age = self.birth[kept], self.age[kept] + 1
+        if "told" in self.doubts:
+            self.ids = self.ids[kept]
         for g in self.ghosts:  # dead reckoning, then one step of each hypothesis's walk (bouncing)
             g["x"], g["life"] = g["x"] - dx, g["life"] + 1
             n = len(g["ys"])
@@ -175,11 +192,15 @@ class DoubtingMap(WalkingDiscMap):
             for k in np.flatnonzero(seen & ~landed):
                 (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
                 g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
-                     "open": np.ones(len(h), bool), "life": age}  # its walks from where its disc was made
+                     "open": np.ones(len(h), bool), "life": age,  # its walks from where its disc was made
+                     "id": int(self.ids[k]) if "told" in self.doubts else -1}
                 g["open"] &= ~self.seen_through(g, d)
                 if age <= GHOST_AGE and g["open"].any() and not found(g, new):
                     self.ghosts.append(g)
-        return super()._merge(obs, d, new, other)
+        kept = super()._merge(obs, d, new, other)
+        if "told" in self.doubts:  # new discs first, as the map keeps them
+            self.ids = np.r_[belonging(new, self.truth[0]) if len(new) else np.zeros(0, int), self.ids[kept]]
+        return kept
 
     def seen_through(self, ghost: dict, d: np.ndarray) -> np.ndarray:
         """Per hypothesis of ``ghost``: a column of the image of per-column depth ``d`` saw through its circle
@@ -266,6 +287,9 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
     index, born = m.remembered()
     prior = np.r_[1.0 - m.walks, np.full(len(h) - 1, m.walks / (len(h) - 1))]  # the course's motion model
     ghosts = [prior * g["open"] / (prior * g["open"]).sum() for g in m.ghosts] if m.ghosts else []
+    y_true = [None if g["id"] < 0 else m.truth[0][g["id"], 1] for g in m.ghosts]  # ``told``'s truth
+    told = [None if y is None else int(np.argmin(np.where(g["open"], np.abs(g["ys"] - y), np.inf)))
+            for g, y in zip(m.ghosts, y_true, strict=True)]
     if not (len(weights) or tracked.any() or len(index) or ghosts):
         return Tally.undrawn(planner.ties, choice, keys, lattice)
     rng = np.random.default_rng((planner._key, planner._remaining))
@@ -293,12 +317,35 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
             speeds[index] = np.sign(turned) * np.abs(v)
         if ghosts:  # each ghost at a hypothesis drawn from the course's prior over its open ones
             m.draw = [int(later.choice(len(h), p=w)) for w in ghosts]
+            if "told" in m.doubts:  # or at the open one nearest its cylinder now, in every draw
+                m.draw = [d if t is None else t for t, d in zip(told, m.draw, strict=True)]
             speeds[slots:] = m._slots()[1]
         try:
             tally.add(planner._keys_if(horizon, speeds), planner._drawn)
         finally:
             m.discs[:, 1], m.draw = y0, None
     return tally.ranked()
+
+
+class ToldPlanner(DiscTrackingPlanner):
+    """``told``: the disc planner with eyes of its own on the world (privileged), so that its map can tell
+    each ghost where its cylinder is (:class:`~husky_course.planners.reference.SeenMotionPlanner`'s way)."""
+
+    privileged = True
+
+    def reset(self, start: EpisodeStart) -> None:
+        super().reset(start)
+        self.eyes = FastSimulator(start.sim.config)
+        self.eyes.load(start.sim.world)
+        self.time = 0.0
+
+    def act(self, obs: np.ndarray, pose: np.ndarray | None = None) -> int:
+        self.map.truth = truth_in_frame(self.eyes.world, np.asarray(pose, float), self.time)
+        return super().act(obs, pose)
+
+    def observe(self, action: int, obs_next: np.ndarray | None) -> None:
+        super().observe(action, obs_next)
+        self.time += 1.0
 
 
 def doubting_planner(profile: Profile, variant: str):
@@ -310,6 +357,8 @@ def doubting_planner(profile: Profile, variant: str):
     doubts = frozenset() if variant == NOTHING else frozenset(variant.split("+"))
     if not doubts <= set(DOUBTS):
         raise SystemExit(f"a variant joins {DOUBTS} with '+'; got {variant!r}")
+    if "told" in doubts:  # ghosts, each told its open hypothesis nearest the truth (privileged)
+        planner.__class__, doubts = ToldPlanner, doubts | {"ghosts"}
     planner.map.__class__ = DoubtingMap
     planner.map.doubts = doubts
     planner.map.reset()

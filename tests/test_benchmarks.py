@@ -182,10 +182,11 @@ CASES: dict[str, tuple[list[str], str]] = {
     ),
     "exp_moving_doubt_memory.py": (  # the map doubting nothing must win exactly the driver's worlds
         ["--profile", "quick", "--worlds", "3", "--start", "0", "--workers", "1",
-         "--variants", "evidence+posterior+promote+aged+ghosts", "in-view", "--check"],
+         "--variants", "evidence+posterior+promote+aged+ghosts+told", "in-view", "--check"],
         rf"episodes, worlds 0-2 of {TUNING} \(tuning\), moving course, quick profile:\n"
         r" +\(as it is\) +\d\.\d{3} \["
-        r"[\s\S]*evidence\+posterior\+promote\+aged\+ghosts +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}\n"
+        r"[\s\S]*evidence\+posterior\+promote\+aged\+ghosts\+told +\d\.\d{3} \["
+        r".*only without: \d+, p = \d\.\d{3}\n"
         r"[\s\S]*in-view +\d\.\d{3} \[.*only without: \d+, p = \d\.\d{3}\n"
         r" +nothing doubted +\d\.\d{3} \[.*won only with it: 0, only without: 0, p = 1\.000",
     ),
