@@ -135,7 +135,8 @@ class DoubtingMap(WalkingDiscMap):
         self.ghosts: list[dict] = []  #: ``ghosts``: per dropped disc, ``x, r``, hypotheses ``ys, vs, open``
         self.draw: list[int] | None = None  #: a draw's hypothesis per ghost (None: the ghosts left out)
         self.ids = np.zeros(0, int)  #: ``told``: per disc, the cylinder it belongs to (-1: none)
-        self.truth: tuple[np.ndarray, np.ndarray] = (np.empty((0, 3)), np.empty(0))  #: ``told``: this image's
+        #: ``told``: every cylinder and its velocity in the robot's frame now (:func:`truth_in_frame`)
+        self.truth: tuple[np.ndarray, np.ndarray] = (np.empty((0, 3)), np.empty(0))
 
     def add(self, obs: np.ndarray) -> None:  # WalkingDiscMap.add, with the doubts' hooks
         d, cols, pts, pieces = self.pieces(obs)
@@ -290,7 +291,7 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
     ghosts = [prior * g["open"] / (prior * g["open"]).sum() for g in m.ghosts] if m.ghosts else []
     y_true = [None if g["id"] < 0 else m.truth[0][g["id"], 1] for g in m.ghosts]  # ``told``'s truth
     told = [None if y is None else int(np.argmin(np.where(g["open"], np.abs(g["ys"] - y), np.inf)))
-            for g, y in zip(m.ghosts, y_true, strict=True)]
+            for g, y in zip(m.ghosts, y_true, strict=True)]  # the open hypothesis nearest its cylinder now
     if not (len(weights) or tracked.any() or len(index) or ghosts):
         return Tally.undrawn(planner.ties, choice, keys, lattice)
     rng = np.random.default_rng((planner._key, planner._remaining))
