@@ -110,6 +110,15 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*\n +\(told nothing\) +\d\.\d{3} \[\d\.\d{3}, \d\.\d{3}\]  won only with it: 0, "
         r"only without: 0,",
     ),
+    "exp_moving_drift.py": (
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--episodes", "2", "--variants", "S:age4",
+         "S:shown", "ghost:exact+own"],
+        rf"walkers' discs dropped at their centre column on moving tuning worlds 1000-1002 \({TUNING}, quick "
+        r"profile\): \d+\n[\s\S]*\n  all +\d+[\s\S]*first sight[\s\S]*within 0\.1[\s\S]*"
+        r"tracked walkers' discs at birth: \d+"
+        rf"[\s\S]*episodes, worlds 1000-1001 of {TUNING} \(tuning\), moving course, quick profile:"
+        r"[\s\S]*\n +ghost:exact\+own +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}",
+    ),
     "exp_moving_lost.py": (  # the drops' privileged runs must decide as the planner does (--check)
         ["--profile", "quick", "--worlds", "3", "--episodes", "3", "--workers", "1", "--check",
          "--variants", "keep:0.15", "split:3", "cylinder:0.1", "reloc:0.8:all"],
