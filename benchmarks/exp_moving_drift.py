@@ -60,16 +60,16 @@ MEASURED = """
 Full profile, library fingerprint ``199de8c9e356d225``; ``--worlds 1000`` from ``--start 1000`` and from
 ``--start 7000`` (about 5 minutes each on 2 cores). The walkers' drops, by the speed their disc was born with:
 
-=================  =============================  =============================  ======================
-speed at birth     drops, 1,000-1,999             drops (not shown), 7,000-7,999  dropped per decision
-=================  =============================  =============================  ======================
-first sight        328                            319 (241)                      0.027 / 0.026
-read standing      16                             29 (19)                        0.011 / 0.021
-wrong way          9                              12 (11)                        0.014 / 0.020
-off by > 0.1       19                             17 (9)                         0.013 / 0.013
-within 0.1         71                             60 (21)                        0.004 / 0.003
-all                443 (311 not shown)            437 (301)                              0.013 / 0.013
-=================  =============================  =============================  ======================
+==============  ===================  ==============================  ====================
+speed at birth  drops, 1,000-1,999   drops (not shown), 7,000-7,999  dropped per decision
+==============  ===================  ==============================  ====================
+first sight     328                  319 (241)                       0.027 / 0.026
+read standing   16                   29 (19)                         0.011 / 0.021
+wrong way       9                    12 (11)                         0.014 / 0.020
+off by > 0.1    19                   17 (9)                          0.013 / 0.013
+within 0.1      71                   60 (21)                         0.004 / 0.003
+all             443 (311 not shown)  437 (301)                       0.013 / 0.013
+==============  ===================  ==============================  ====================
 
 Medians, all drops (both slices alike): dropped 1 step after the disc was made (339 of 437 by the very next
 image), 0.48 / 0.45 m off, of which 0.05 / 0.04 m at birth and 0.47 / 0.44 m its speed's error times the
@@ -86,8 +86,8 @@ turned at a wall in the last three steps 0.540 / 0.524, no turn 0.123 / 0.114; p
 in full view 0.115 / 0.109. Two-look tracks (47% of tracked walkers' discs) carry most large errors.
 
 Episodes, tuning worlds 7,000-7,999 (the planner as it is 0.838), won only with / only without:
-``S:all`` 0.848 (14 / 4, p = 0.031; on 8,000-8,999 ``exp_moving_variants.py``'s ``memory:S`` 0.870 against
-0.862, 12 / 4: together 26 / 8, p = 0.003); ``S:age4`` 0.848 (14 / 4: the same as ``S``, so a cylinder given
+rule ``S`` itself (``exp_moving_variants.py``'s ``memory:S``, the planner ``S:all`` builds) 0.848 (14 / 4,
+p = 0.031; on 8,000-8,999 0.870 against 0.862, 12 / 4: together 26 / 8, p = 0.003); ``S:age4`` 0.848 (14 / 4: the same as ``S``, so a cylinder given
 back longer than a ghost lives gains nothing more); ``S:first`` 0.841 (7 / 4); ``S:tracked`` 0.844 (6 / 0);
 ``S:hidden`` 0.842 (7 / 3); ``S:shown`` 0.844 (6 / 0). Rule ``S`` is a point made of small parts, each
 half a point or less, none established alone by 1,000 worlds.
