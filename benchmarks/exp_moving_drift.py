@@ -85,12 +85,12 @@ wrong way): 2 looks 0.253 / 0.243 (0.122 / 0.116 standing), 3 looks 0.064 / 0.05
 turned at a wall in the last three steps 0.540 / 0.524, no turn 0.123 / 0.114; partly hidden 0.277 / 0.267,
 in full view 0.115 / 0.109. Two-look tracks (47% of tracked walkers' discs) carry most large errors.
 
-Episodes, tuning worlds 7,000-7,999 (the planner as it is 0.838), won only with / only without:
-rule ``S`` itself (``exp_moving_variants.py``'s ``memory:S``, the planner ``S:all`` builds) 0.848 (14 / 4,
-p = 0.031; on 8,000-8,999 0.870 against 0.862, 12 / 4: together 26 / 8, p = 0.003); ``S:age4`` 0.848 (14 / 4: the same as ``S``, so a cylinder given
-back longer than a ghost lives gains nothing more); ``S:first`` 0.841 (7 / 4); ``S:tracked`` 0.844 (6 / 0);
-``S:hidden`` 0.842 (7 / 3); ``S:shown`` 0.844 (6 / 0). Rule ``S`` is a point made of small parts, each
-half a point or less, none established alone by 1,000 worlds.
+Episodes, tuning worlds 7,000-7,999 (the planner as it is 0.838), won only with / only without: rule ``S``
+itself (``exp_moving_variants.py``'s ``memory:S``, the planner ``S:all`` builds) 0.848 (14 / 4, p = 0.031; on
+8,000-8,999 0.870 against 0.862, 12 / 4: together 26 / 8, p = 0.003); ``S:age4`` 0.848 (14 / 4: the same as
+``S``, so a cylinder given back longer than a ghost lives gains nothing more); ``S:first`` 0.841 (7 / 4);
+``S:tracked`` 0.844 (6 / 0); ``S:hidden`` 0.842 (7 / 3); ``S:shown`` 0.844 (6 / 0). Rule ``S`` is a point
+made of small parts, each half a point or less, none established alone by 1,000 worlds.
 """
 READINGS = ("first sight", "read standing", "wrong way", "off > 0.1", "within 0.1")  #: a speed at birth
 #: per disc, from its birth: time, lateral error, speed error, reading, looks, turned, partly hidden, speed
