@@ -108,6 +108,7 @@ import numpy as np
 from exp_moving_memory import belonging
 
 from husky_course.config import Profile, get_profile, with_world
+from husky_course.planners.arrivals import Arrivals
 from husky_course.planners.base import EpisodeStart
 from husky_course.planners.moving_discs import DiscTrackingPlanner, WalkingDiscMap
 from husky_course.planners.reference import truth_in_frame
@@ -207,10 +208,7 @@ class DoubtingMap(WalkingDiscMap):
     def seen_through(self, ghost: dict, d: np.ndarray) -> np.ndarray:
         """Per hypothesis of ``ghost``: a column of the image of per-column depth ``d`` saw through its circle
         (reached more than the arrivals' ``tolerance`` past its front)."""
-        a = self.arrivals
-        front = a.front(ghost["x"], ghost["ys"], ghost["r"])
-        with np.errstate(invalid="ignore"):  # inf - inf off the circle: masked
-            return ((front < a.camera.far - a.tolerance) & (d[None] > front + a.tolerance)).any(1)
+        return through(self.arrivals, self.arrivals.front(ghost["x"], ghost["ys"], ghost["r"]), d)
 
     def _slots(self) -> tuple[np.ndarray, np.ndarray]:
         """``(points (ghosts, 3), velocity (ghosts,))`` of the ghosts' slots: each at :attr:`draw`'s
@@ -244,16 +242,27 @@ class DoubtingMap(WalkingDiscMap):
             a, h = self.arrivals, self.arrivals.hypotheses
             for n, k in enumerate(index):
                 x, y, r = self.discs[k]
-                through = np.zeros(len(h), int)
+                seen = np.zeros(len(h), bool)
                 for j, (depth, shift) in enumerate(a.history[: self.age[k]]):  # j steps ago, newest first
-                    front = a.front(x + shift[0], y + shift[1] + h * (self.age[k] - j), r)
-                    near = front < a.camera.far - a.tolerance
-                    with np.errstate(invalid="ignore"):
-                        through += np.sum(near & (depth > front + a.tolerance), axis=1)
-                left = w[n] * (through == 0)
+                    seen |= through(a, a.front(x + shift[0], y + shift[1] + h * (self.age[k] - j), r), depth)
+                left = w[n] * ~seen
                 if left.sum() > 0:
                     w[n] = left / left.sum()
         return index, w
+
+
+def through(a: Arrivals, front: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Per hypothesis (row of ``front``, :meth:`~husky_course.planners.arrivals.Arrivals.front`): a column of
+    the image of per-column depth ``depth`` saw through its circle (reached more than ``a``'s ``tolerance``
+    past its front, where the front lies within the camera's range)."""
+    with np.errstate(invalid="ignore"):  # inf - inf off the circle: masked
+        return ((front < a.camera.far - a.tolerance) & (depth[None] > front + a.tolerance)).any(1)
+
+
+def course_prior(fraction: float, n: int) -> np.ndarray:
+    """The course's motion model over ``n`` hypotheses, standing first: standing ``1 - fraction``, each of
+    the ``n - 1`` walks an equal share of ``fraction``."""
+    return np.r_[1.0 - fraction, np.full(n - 1, fraction / (n - 1))]
 
 
 def found(ghost: dict, new: np.ndarray) -> bool:
@@ -273,8 +282,7 @@ def posterior(tracks, track: np.ndarray, hypotheses: np.ndarray) -> np.ndarray:
     w, s = 1.0 / track[:, 3] ** 2, -track[:, 0]
     se = tracks.error_scale / np.sqrt(np.sum(w * (s - np.average(s, weights=w)) ** 2))
     log = -0.5 * ((tracks.line(track)[1] - hypotheses) / se) ** 2
-    prior = np.r_[1.0 - fraction, np.full(len(hypotheses) - 1, fraction / (len(hypotheses) - 1))]
-    p = prior * np.exp(log - log.max())
+    p = course_prior(fraction, len(hypotheses)) * np.exp(log - log.max())
     return p / p.sum()
 
 
@@ -287,7 +295,7 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
     group, weights = m.walk_doubt
     tracked = planner.tracked if planner.speed_sigma > 0 else np.zeros(0, bool)
     index, born = m.remembered()
-    prior = np.r_[1.0 - m.walks, np.full(len(h) - 1, m.walks / (len(h) - 1))]  # the course's motion model
+    prior = course_prior(m.walks, len(h))
     ghosts = [prior * g["open"] / (prior * g["open"]).sum() for g in m.ghosts] if m.ghosts else []
     y_true = [None if g["id"] < 0 else m.truth[0][g["id"], 1] for g in m.ghosts]  # ``told``'s truth
     told = [None if y is None else int(np.argmin(np.where(g["open"], np.abs(g["ys"] - y), np.inf)))

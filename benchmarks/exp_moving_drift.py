@@ -2,9 +2,9 @@
 
 Run: ``python benchmarks/exp_moving_drift.py [--profile full] [--worlds 1000] [--start 1000] [--workers 2]
 [--episodes 1000 --variants S:all S:age4 S:first S:tracked S:hidden S:shown ghost:told ghost:exact
-ghost:exact+own] [--base B.npz]`` (the disc planner needs its networks: ``python -m husky_course train
-discs``; ``--base``: the planner's own episodes kept for the next run, as ``exp_moving_variants.py`` keeps
-them).
+ghost:exact+own ghost:exact+own+all] [--base B.npz]`` (the disc planner needs its networks: ``python -m
+husky_course train discs``; ``--base``: the planner's own episodes kept for the next run, as
+``exp_moving_variants.py`` keeps them).
 
 Why: ``exp_moving_lost.py`` found that most cylinders the disc planner's map drops are walkers whose
 remembered disc, when the column through its centre saw through it, lay half a metre or more from the
@@ -32,8 +32,9 @@ steps since.
    (:data:`PARTS`: all; each cylinder given back only until its dropped disc is :data:`AGE` steps old, as
    long as a ghost lives; the drops of first sights' discs, or of tracked ones; the drops the image does not
    show, or does); ``ghost:VARIANT`` (:data:`GHOSTS`), ``told`` ghosts told more: each ghost of a cylinder
-   put at its true place and speed in every draw (``exact``), and ended only by a new disc on its own
-   cylinder (``own``).
+   put at its true place and speed in every draw (``exact``), ended only by a new disc on its own cylinder
+   (``own``), and made for every drop rule ``S`` gives back, a new disc landing on the dropped one or not
+   (``all``).
 
 Measured (full profile): see :data:`MEASURED`.
 """
@@ -99,7 +100,7 @@ OFF = 0.1  #: m per step: a large speed error
 #: :func:`split`'s parts of rule ``S``: the drops the image does not show (hidden or out of view) or does;
 #: of first sights or of tracked discs; all, but each given back only until its disc is :data:`AGE` steps old
 PARTS = ("all", "hidden", "shown", "first", "tracked", "age4")
-GHOSTS = ("told", "exact", "exact+own")  #: :func:`ghost`'s variants
+GHOSTS = ("told", "exact", "exact+own", "exact+own+all")  #: :func:`ghost`'s variants
 AGE = 4  #: steps: ``age4`` gives a cylinder back as long as ``exp_moving_doubt_memory.py`` keeps a ghost
 
 
@@ -239,7 +240,9 @@ class ExactGhostMap(doubt.DoubtingMap):
     """``exp_moving_doubt_memory.py``'s ``told`` ghosts, told more (privileged, :data:`GHOSTS`): ``exact``
     puts each ghost of a cylinder, in every draw, at that cylinder's true place and speed (not its open walk
     nearest it); ``own`` ends such a ghost only when a new disc lands on its own cylinder (not on any of its
-    walks, and not when an image has seen through every walk) or it ages out."""
+    walks, and not when an image has seen through every walk) or it ages out; ``all`` (with ``own``) makes
+    a ghost of every disc an image sees through or again, a new disc landing on it or not, as rule ``S``
+    gives back every cylinder so dropped that no disc holds."""
 
     exact: frozenset[str]
 
@@ -252,7 +255,7 @@ class ExactGhostMap(doubt.DoubtingMap):
         return points, v
 
     def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
-        if "own" not in self.exact:
+        if "own" not in self.exact:  # (``all`` comes with ``own``: :data:`GHOSTS`)
             return super()._merge(obs, d, new, other)
         own = memory.belonging(new, self.truth[0]) if len(new) else np.zeros(0, int)
 
@@ -267,7 +270,8 @@ class ExactGhostMap(doubt.DoubtingMap):
         self.ghosts = [g for g in self.ghosts if kept(g)]
         seen, landed = self.forgotten(d, new)
         h = self.arrivals.hypotheses
-        for k in np.flatnonzero(seen & ~landed):  # as DoubtingMap makes its ghosts
+        made = seen if "all" in self.exact else seen & ~landed  # ``all``: a new disc landed on it too
+        for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts
             (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
             g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
                  "open": np.ones(len(h), bool), "life": age, "id": int(self.ids[k])}
