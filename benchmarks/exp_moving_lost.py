@@ -105,8 +105,9 @@ kept as an undecided walker, its walk drawn in the planner's draws over the walk
 not see through) crossed 0.777 (31 / 100): phantom walkers, 4,888 in 1,000 worlds; guarded against a new
 disc within a step's walk, 0.846 (2 / 2). Every dropped disc kept so, its walks ruled out image by image
 (``exp_moving_doubt_memory.py``'s ``ghosts``): 21 / 19 on tuning worlds 9,000-12,999, nothing either; each
-ghost told which of its walks is nearest the truth (its ``told``, privileged): 6 / 6 on 7,000-8,999. What
-``S`` gives back is the place, which the walks from a disc half a metre off do not hold.
+ghost told which of its walks is nearest the truth (its ``told``, privileged): 6 / 6 on 7,000-8,999. Why:
+``exp_moving_drift.py`` (three drops in four are first sights, one unknown step off; the ghosts lack which
+new disc is which cylinder, not the place).
 """
 
 
