@@ -94,18 +94,20 @@ itself (``exp_moving_variants.py``'s ``memory:S``, the planner ``S:all`` builds)
 made of small parts, each half a point or less, none established alone by 1,000 worlds.
 
 Why ``exp_moving_doubt_memory.py``'s ``told`` ghosts held none of it, on the same worlds (``--variants
-ghost:...``, about 4.5 minutes each): ``told`` 0.836 (1 / 3, as that script measured); ``real`` (no ghost of
-a disc on no cylinder: 30 of 73 ghost-decisions on worlds 7,000-7,039 were of such phantoms) 0.837 (1 / 2);
+ghost:...``, about 4.5 minutes each): ``told`` 0.836 (1 / 3, as that script measured); ``real`` (no ghost of a
+disc on no cylinder: 30 of 73 ghost-decisions on worlds 7,000-7,039 were of such phantoms) 0.837 (1 / 2);
 ``exact`` (every ghost of a cylinder at its true place and speed) 0.838 (2 / 2); ``exact+own`` (ended only by
 a new disc on its own cylinder) 0.842 (6 / 2), with ``real`` too the same 0.842 (6 / 2); ``exact+own+all``
 (made for every drop ``S`` gives back, a new disc landing on the dropped one or not) 0.848 (12 / 2): all of
-``S``. So the ghosts' place was never what they lacked (told ghosts already stood a median 5 cm from their
-cylinder on worlds 1,000-1,014), nor did their phantoms cost: what they lacked was *identity*. A ghost ends
-when any new disc overlaps one of its walks, and none is made where a new disc lands on the dropped one; told
-which new disc is its own cylinder's (privileged), ending and making ghosts by that alone gives all of ``S``.
-Where the two rules part, the new disc was another cylinder's (a neighbour, or a piece read as joined), and
-the dropped cylinder was forgotten while still there. What rule ``S`` gives is which new disc is which
-cylinder: data association, not a sharper belief over where it walked.
+``S``. On 8,000-8,999 (as it is 0.862, ``S`` 0.870): ``exact+own`` 0.870 (11 / 3), ``exact+own+all`` 0.871 (14
+/ 5); the two slices together 17 / 5 and 26 / 7 (``S`` 26 / 8). So the ghosts' place was never what they
+lacked (told ghosts already stood a median 5 cm from their cylinder on worlds 1,000-1,014), nor did their
+phantoms cost: what they lacked was *identity*. A ghost ends when any new disc overlaps one of its walks, and
+none is made where a new disc lands on the dropped one; told which new disc is its own cylinder's
+(privileged), ending and making ghosts by that alone gives all of ``S``. Where the two rules part, the new
+disc was another cylinder's (a neighbour, or a piece read as joined), and the dropped cylinder was forgotten
+while still there. What rule ``S`` gives is which new disc is which cylinder: data association, not a sharper
+belief over where it walked.
 """
 READINGS = ("first sight", "read standing", "wrong way", "off > 0.1", "within 0.1")  #: a speed at birth
 #: per disc, from its birth: time, lateral error, speed error, reading, looks, turned, partly hidden, speed
