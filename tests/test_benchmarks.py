@@ -111,7 +111,7 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"only without: 0,",
     ),
     "exp_moving_drift.py": (
-        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--episodes", "2", "--variants", "S:age4",
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--episodes", "2", "--variants", "S:first",
          "S:shown", "ghost:exact+own"],
         rf"walkers' discs dropped at their centre column on moving tuning worlds 1000-1002 \({TUNING}, quick "
         r"profile\): \d+\n[\s\S]*\n  all +\d+[\s\S]*first sight[\s\S]*within 0\.1[\s\S]*"
