@@ -119,7 +119,8 @@ OFF = 0.1  #: m per step: a large speed error
 #: does; of first sights' discs or of tracked ones
 PARTS = ("all", "hidden", "shown", "first", "tracked")
 #: :func:`ghost`'s variants
-GHOSTS = ("told", "real", "exact", "exact+own", "exact+own+all", "exact+own+real", "exact+own+all+real")
+GHOSTS = ("told", "real", "exact", "exact+own", "exact+own+all", "exact+own+real", "exact+own+all+real",
+          "own+all")
 
 
 def reading(speed: float, true: float, first: bool) -> int:

@@ -119,6 +119,15 @@ CASES: dict[str, tuple[list[str], str]] = {
         rf"[\s\S]*episodes, worlds 1000-1001 of {TUNING} \(tuning\), moving course, quick profile:"
         r"[\s\S]*\n +ghost:exact\+own +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}",
     ),
+    "exp_moving_identity.py": (  # the identity map with neither rule must win exactly the ghosts' worlds
+        ["--profile", "quick", "--agreement", "2", "--worlds", "2", "--workers", "1", "--variants", "track",
+         "--check"],
+        r"discs an image saw through or again along the track planner's runs, moving tuning worlds "
+        r"7000-7001 \(quick profile\)[\s\S]*\n  found again +\d+ +\d\.\d{3} +\d\.\d{3}"
+        rf"[\s\S]*episodes, worlds 7000-7001 of {TUNING} \(tuning\), moving course, quick profile:"
+        r"[\s\S]*\n +track +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}"
+        r"[\s\S]*\n'neither' won exactly the worlds ghosts won: True",
+    ),
     "exp_moving_lost.py": (  # the drops' privileged runs must decide as the planner does (--check)
         ["--profile", "quick", "--worlds", "3", "--episodes", "3", "--workers", "1", "--check",
          "--variants", "keep:0.15", "split:3", "cylinder:0.1", "reloc:0.8:all"],

@@ -1,0 +1,282 @@
+"""Experiment: ghosts that know which new disc is their own cylinder's from the camera alone (its track).
+
+Run: ``python benchmarks/exp_moving_identity.py [--profile full] [--worlds 1000] [--start 7000]
+[--variants ghosts track track-end track-make] [--workers 2] [--base B.npz]`` (the disc planner needs its
+networks: ``python -m husky_course train discs cuts``; ``--base``: the planner's own episodes kept for the
+next run, as ``exp_moving_variants.py`` keeps them).
+
+Why: ``exp_moving_drift.py`` found that ``exp_moving_doubt_memory.py``'s ghosts (a dropped disc kept as one
+hypothesis per walk of the course's motion model, its walks an image sees through ruled out) lacked
+*identity*, not place: told which new disc is its own cylinder's (privileged), a ghost that ends only when its
+own cylinder is seen again, and is made for every dropped disc whose cylinder the new image shows no disc
+of, gives all of ``exp_moving_memory.py``'s rule ``S`` (12 / 2 on tuning worlds 7,000-7,999, ``S`` 14 / 4).
+The camera's own answer to "which new disc is which cylinder" is the tracks
+(:class:`~husky_course.planners.motion.Tracks`): a piece of surface joins the track whose line predicts it,
+so a new disc either *continues* a track that was there before this image, or is a first sight (a new
+track), or lies on a piece too long to track (over 1 m: a wall, or several things read as one).
+
+Every disc here carries the name of its piece's track (:class:`NamedTracks`: a name per track, kept while
+the track is continued). The rules (:class:`IdentityMap`, on the ghosts of ``exp_moving_doubt_memory.py``,
+with their draws from the course's prior: nothing privileged):
+
+* ``track-end``: a ghost ends when a new disc continues its own track, or when a new disc that continues no
+  earlier track (a first sight, or untracked) overlaps one of its open walks; a new disc continuing another
+  track (another cylinder, as far as the camera can tell) leaves it. A ghost of an untracked disc ends as
+  before, on any new disc over an open walk.
+* ``track-make``: a ghost is made for every disc an image sees through or again (its centre column reaches
+  its front) unless its own cylinder is found: a new disc continues its track, or a new disc that continues
+  no other track lands on it (centres closer than the larger radius; any new disc, for an untracked disc).
+  As before, a ghost is made only where its disc is at most ``GHOST_AGE`` steps old and some walk is still
+  open.
+* ``track``: both.
+
+``ghosts`` is ``exp_moving_doubt_memory.py``'s ghosts as they are (a ghost ends on any new disc over an open
+walk; made only where no new disc landed on the dropped one). Each variant runs as a planner on the same
+tuning worlds as the planner as it is: success with its exact interval, the worlds won only with / only
+without it, exact sign test.
+
+Measured (full profile): see :data:`MEASURED`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import exp_moving_doubt_memory as doubt
+import exp_moving_variants as variants
+import numpy as np
+from exp_moving_memory import belonging
+
+from husky_course.config import Profile, get_profile, with_world
+from husky_course.engines import map_tasks
+from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+from husky_course.planners.motion import Tracks
+from husky_course.sim.fast import FastSimulator
+
+MEASURED = """
+Not yet measured.
+"""
+TRUTHS = ("found again", "not found, standing", "not found, walking", "no cylinder")  #: :class:`CheckedMap`
+RULES = ("ghosts", "track", "track-end", "track-make")  #: the variants (module docstring)
+#: :class:`IdentityMap` with neither rule (``--check``): it must win exactly the worlds ``ghosts`` wins
+NEITHER = "neither"
+
+
+class NamedTracks(Tracks):
+    """:class:`~husky_course.planners.motion.Tracks` that name each track: ``names`` is aligned with
+    ``tracks``; after :meth:`update`, per piece it was given, ``piece_names`` (its track's name, -1: a piece
+    too long to track) and ``continued`` (its track was there before this image)."""
+
+    names: list[int]
+    piece_names: np.ndarray
+    continued: np.ndarray
+    counter: int
+
+    def reset(self) -> None:
+        super().reset()
+        self.names, self.counter = [], 0
+        self.piece_names, self.continued = np.zeros(0, int), np.zeros(0, bool)
+
+    def update(self, pieces: list[np.ndarray], now: np.ndarray,
+               centres: np.ndarray | None = None) -> np.ndarray:
+        old, names = list(self.tracks), list(self.names)
+        v = super().update(pieces, now, centres)
+        small = [k for k, idx in enumerate(pieces) if np.ptp(now[idx], axis=0).max() <= 1.0]
+        self.names = []
+        for t in self.tracks:  # a lost track is the same array; a continued one ends with its last look
+            name = next((n for o, n in zip(old, names, strict=True)
+                         if o is t or (len(t) > 1 and np.array_equal(t[-2], o[-1]))), -1)
+            if name < 0:
+                name, self.counter = self.counter, self.counter + 1
+            self.names.append(name)
+        self.piece_names, self.continued = np.full(len(pieces), -1), np.zeros(len(pieces), bool)
+        for j, k in enumerate(small):  # the first tracks are this image's small pieces, in order
+            self.piece_names[k], self.continued[k] = self.names[j], len(self.tracks[j]) > 1
+        return v
+
+
+class IdentityMap(doubt.DoubtingMap):
+    """``exp_moving_doubt_memory.py``'s ghosts, ended and made by the tracks' identity as :attr:`rule`
+    names (module docstring). ``names``: per disc, its piece's track's name when it was made (-1: none)."""
+
+    rule: frozenset[str]
+    names: np.ndarray
+
+    def reset(self) -> None:
+        super().reset()
+        self.names = np.zeros(0, int)
+
+    def decode(self, d: np.ndarray, cols: np.ndarray, pts: np.ndarray, pieces: list[np.ndarray]):
+        out = super().decode(d, cols, pts, pieces)
+        self._cylinder = out[1]  # which pieces become discs (``new`` in :meth:`_merge`, in order)
+        return out
+
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        kept = super().move(dx, dy)
+        self.names = self.names[kept]
+        return kept
+
+    def new_names(self, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(names, strange)`` per disc of ``new``: its piece's track's name (-1: none), and whether it
+        continues no earlier track (a first sight, or a piece too long to track)."""
+        tracks = self.motion.tracks
+        assert isinstance(tracks, NamedTracks)
+        if not len(new):
+            return np.zeros(0, int), np.zeros(0, bool)
+        return tracks.piece_names[self._cylinder], ~tracks.continued[self._cylinder]
+
+    def found(self, new: np.ndarray, names: np.ndarray, strange: np.ndarray) -> np.ndarray:
+        """Per remembered disc, whether the tracks say the new image found its cylinder again: a new disc of
+        ``new`` (track names ``names``; ``strange``: continuing no earlier track) continues its track, or one
+        that continues no other track lands on it (any new disc, for a disc with no track)."""
+        if not len(new):
+            return np.zeros(len(self.discs), bool)
+        gap = np.hypot(self.discs[:, None, 0] - new[None, :, 0], self.discs[:, None, 1] - new[None, :, 1])
+        lands = gap < np.maximum(self.discs[:, None, 2], new[None, :, 2])
+        mine = self.names[:, None] >= 0
+        return ((mine & (self.names[:, None] == names[None])) | (lands & (strange[None] | ~mine))).any(1)
+
+    def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
+        names, strange = self.new_names(new)
+        end, make = "end" in self.rule, "make" in self.rule
+
+        def ended(g: dict) -> bool:
+            if not g["open"].any():
+                return True
+            if end and g["name"] >= 0:
+                return bool((names == g["name"]).any()) or doubt.found(g, new[strange])
+            return doubt.found(g, new)
+
+        for g in self.ghosts:
+            g["open"] &= ~self.seen_through(g, d)
+        self.ghosts = [g for g in self.ghosts if not ended(g)]
+        seen, landed = self.forgotten(d, new)
+        made = seen & ~(self.found(new, names, strange) if make else landed)
+        h = self.arrivals.hypotheses
+        for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts: its walks from where it was made
+            (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
+            g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
+                 "open": np.ones(len(h), bool), "life": age, "id": -1, "name": int(self.names[k])}
+            g["open"] &= ~self.seen_through(g, d)
+            if age <= doubt.GHOST_AGE and not ended(g):
+                self.ghosts.append(g)
+        kept = super(doubt.DoubtingMap, self)._merge(obs, d, new, other)
+        self.names = np.r_[names, self.names[kept]]
+        return kept
+
+
+class CheckedMap(IdentityMap):
+    """:class:`IdentityMap` with ``track``'s rules that also counts (privileged: the eyes of
+    ``exp_moving_doubt_memory.py``'s ``ToldPlanner``) every disc an image sees through or again, by what
+    became of its cylinder (found again: a new disc belongs to it; not found, standing or walking; no
+    cylinder under the disc) and which rule says it was found: a new disc landed on it (``ghosts``), the
+    tracks (:meth:`IdentityMap.found`). ``counts[truth, landed, tracks]``, kept across episodes."""
+
+    ids: np.ndarray
+    counts: np.ndarray
+
+    def reset(self) -> None:
+        super().reset()
+        self.ids = np.zeros(0, int)
+        if not hasattr(self, "counts"):
+            self.counts = np.zeros((len(TRUTHS), 2, 2), int)
+
+    def move(self, dx: float, dy: float) -> np.ndarray:
+        kept = super().move(dx, dy)
+        self.ids = self.ids[kept]
+        return kept
+
+    def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
+        cyl, vy = self.truth
+        own = belonging(new, cyl) if len(new) else np.zeros(0, int)
+        seen, landed = self.forgotten(d, new)
+        found = self.found(new, *self.new_names(new))
+        for k in np.flatnonzero(seen):
+            i = int(self.ids[k])
+            truth = 3 if i < 0 else 0 if i in own else 2 if vy[i] != 0 else 1
+            self.counts[truth, int(landed[k]), int(found[k])] += 1
+        kept = super()._merge(obs, d, new, other)
+        self.ids = np.r_[own, self.ids[kept]]
+        return kept
+
+
+def agreement(args: tuple[Profile, list[int]]) -> np.ndarray:
+    """:class:`CheckedMap`'s counts along the ``track`` planner's runs on ``seeds``."""
+    profile, seeds = args
+    planner = identity_planner(profile, "track")
+    planner.__class__ = doubt.ToldPlanner  # eyes for the counts only: the ghosts' draws are not told
+    planner.map.__class__ = CheckedMap
+    planner.map.reset()
+    sim = FastSimulator(profile.sim)
+    for seed in seeds:
+        run_episode(planner, sim, seed, profile.sim.max_primitives)
+    return planner.map.counts
+
+
+def identity_planner(profile: Profile, variant: str):
+    """The disc planner with ``exp_moving_doubt_memory.py``'s ghosts, ended and made as ``variant`` says
+    (:data:`RULES`)."""
+    if variant not in (*RULES, NEITHER):
+        raise SystemExit(f"a variant is one of {', '.join(RULES)}; got {variant!r}")
+    planner = doubt.doubting_planner(profile, "ghosts")
+    if variant != "ghosts":
+        planner.map.__class__ = IdentityMap
+        rules = {"track": {"end", "make"}, NEITHER: set()}.get(variant, {variant[6:]})
+        planner.map.rule = frozenset(rules)
+        planner.map.motion.tracks.__class__ = NamedTracks
+        planner.map.reset()
+    return planner
+
+
+def report(counts: np.ndarray, first: int, n: int, profile: str) -> None:
+    """Print :func:`agreement`'s counts: per truth, how often each rule says the cylinder was found."""
+    print(f"discs an image saw through or again along the track planner's runs, moving tuning worlds "
+          f"{first}-{first + n - 1} ({profile} profile), and which rule said their cylinder was found:")
+    print(f"  {'truth':22s} {'discs':>7s} {'a disc landed':>14s} {'the tracks':>11s} {'only landed':>12s} "
+          f"{'only tracks':>12s}")
+    for name, c in zip(TRUTHS, counts, strict=True):
+        total = int(c.sum())
+        if total:
+            print(f"  {name:22s} {total:7d} {c[1].sum() / total:14.3f} {c[:, 1].sum() / total:11.3f} "
+                  f"{c[1, 0]:12d} {c[0, 1]:12d}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", default="full")
+    parser.add_argument("--worlds", type=int, default=1000)
+    parser.add_argument("--start", type=int, default=7000, help="the first tuning world (evaluation set 1)")
+    parser.add_argument("--variants", nargs="*", default=list(RULES), help=f"of {', '.join(RULES)}")
+    parser.add_argument("--agreement", type=int, default=0,
+                        help="tuning worlds on which to count whose cylinder each rule finds (0: none)")
+    parser.add_argument("--check", action="store_true",
+                        help=f"add the variant {NEITHER!r}, which must win exactly the worlds ghosts wins")
+    parser.add_argument("--base", type=Path, help=variants.BASE_HELP)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    if args.worlds < 1:
+        raise SystemExit(f"--worlds must be positive; got {args.worlds}")
+    profile = with_world(get_profile(args.profile), "moving")
+    for name in args.variants:
+        identity_planner(profile, name)  # a bad name fails before any world runs
+    if args.agreement:
+        seeds = [int(s) for s in eval_world_seeds(args.start + args.agreement, 1)[args.start:]]
+        parts = map_tasks(agreement, [(profile, seeds[i : i + 10]) for i in range(0, len(seeds), 10)],
+                          workers=args.workers, desc="agreement", unit="10 worlds")
+        report(sum(parts), args.start, args.agreement, profile.name)
+    names = [*args.variants, *(["ghosts", NEITHER] if args.check else [])]
+    names = list(dict.fromkeys(names))
+    if not names:
+        return
+    worlds = variants.tuning_worlds(args.start, args.worlds, profile.name)
+    won = variants.paired_episodes(identity_planner, names, profile, worlds, args.workers, args.base)
+    if args.check:
+        same = bool(np.array_equal(won["ghosts"], won[NEITHER]))
+        print(f"{NEITHER!r} won exactly the worlds ghosts won: {same}")
+        if not same:
+            raise SystemExit("the identity map with neither rule is not exp_moving_doubt_memory.py's ghosts")
+
+
+if __name__ == "__main__":
+    main()
