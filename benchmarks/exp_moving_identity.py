@@ -35,6 +35,11 @@ walk; made only where no new disc landed on the dropped one). Each variant runs 
 tuning worlds as the planner as it is: success with its exact interval, the worlds won only with / only
 without it, exact sign test.
 
+The rule for choosing, written down after the first slice ran and before the second: the variant is chosen
+on tuning worlds 7,000-8,999 (both slices, by worlds won only with it less worlds won only without), and the
+chosen one is tested on tuning worlds 9,000-12,999, four slices of 1,000 no choice here has seen, only if it
+wins more worlds than it loses on 7,000-8,999; the test's pooled sign test is the result.
+
 Measured (full profile): see :data:`MEASURED`.
 """
 
