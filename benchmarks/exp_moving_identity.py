@@ -132,15 +132,17 @@ class IdentityMap(doubt.DoubtingMap):
         return tracks.piece_names[self._cylinder], ~tracks.continued[self._cylinder]
 
     def found(self, new: np.ndarray, names: np.ndarray, strange: np.ndarray) -> np.ndarray:
-        """Per remembered disc, whether the tracks say the new image found its cylinder again: a new disc of
-        ``new`` (track names ``names``; ``strange``: continuing no earlier track) continues its track, or one
-        that continues no other track lands on it (any new disc, for a disc with no track)."""
+        """Per remembered disc, whether the tracks say the new image found its cylinder again, and how: 1, a
+        new disc of ``new`` (track names ``names``) continues its track; 2, a new disc that continues no
+        earlier track (``strange``: a first sight, or untracked) lands on it (any new disc lands, for a
+        disc with no track); 0, neither."""
         if not len(new):
-            return np.zeros(len(self.discs), bool)
+            return np.zeros(len(self.discs), int)
         gap = np.hypot(self.discs[:, None, 0] - new[None, :, 0], self.discs[:, None, 1] - new[None, :, 1])
         lands = gap < np.maximum(self.discs[:, None, 2], new[None, :, 2])
         mine = self.names[:, None] >= 0
-        return ((mine & (self.names[:, None] == names[None])) | (lands & (strange[None] | ~mine))).any(1)
+        track = (mine & (self.names[:, None] == names[None])).any(1)
+        return np.where(track, 1, np.where((lands & (strange[None] | ~mine)).any(1), 2, 0))
 
     def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
         names, strange = self.new_names(new)
@@ -157,7 +159,7 @@ class IdentityMap(doubt.DoubtingMap):
             g["open"] &= ~self.seen_through(g, d)
         self.ghosts = [g for g in self.ghosts if not ended(g)]
         seen, landed = self.forgotten(d, new)
-        made = seen & ~(self.found(new, names, strange) if make else landed)
+        made = seen & ~(self.found(new, names, strange) > 0 if make else landed)
         h = self.arrivals.hypotheses
         for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts: its walks from where it was made
             (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
@@ -176,7 +178,7 @@ class CheckedMap(IdentityMap):
     ``exp_moving_doubt_memory.py``'s ``ToldPlanner``) every disc an image sees through or again, by what
     became of its cylinder (found again: a new disc belongs to it; not found, standing or walking; no
     cylinder under the disc) and which rule says it was found: a new disc landed on it (``ghosts``), the
-    tracks (:meth:`IdentityMap.found`). ``counts[truth, landed, tracks]``, kept across episodes."""
+    tracks (:meth:`IdentityMap.found`, and how). ``counts[truth, landed, how]``, kept across episodes."""
 
     ids: np.ndarray
     counts: np.ndarray
@@ -185,7 +187,7 @@ class CheckedMap(IdentityMap):
         super().reset()
         self.ids = np.zeros(0, int)
         if not hasattr(self, "counts"):
-            self.counts = np.zeros((len(TRUTHS), 2, 2), int)
+            self.counts = np.zeros((len(TRUTHS), 2, 3), int)
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         kept = super().move(dx, dy)
@@ -238,13 +240,14 @@ def report(counts: np.ndarray, first: int, n: int, profile: str) -> None:
     """Print :func:`agreement`'s counts: per truth, how often each rule says the cylinder was found."""
     print(f"discs an image saw through or again along the track planner's runs, moving tuning worlds "
           f"{first}-{first + n - 1} ({profile} profile), and which rule said their cylinder was found:")
-    print(f"  {'truth':22s} {'discs':>7s} {'a disc landed':>14s} {'the tracks':>11s} {'only landed':>12s} "
-          f"{'only tracks':>12s}")
+    print(f"  {'truth':22s} {'discs':>7s} {'a disc landed':>14s} {'the tracks':>11s} {'by its track':>13s} "
+          f"{'a new lands':>12s} {'only landed':>12s} {'only tracks':>12s}")
     for name, c in zip(TRUTHS, counts, strict=True):
         total = int(c.sum())
         if total:
-            print(f"  {name:22s} {total:7d} {c[1].sum() / total:14.3f} {c[:, 1].sum() / total:11.3f} "
-                  f"{c[1, 0]:12d} {c[0, 1]:12d}")
+            tracks = c[:, 1:].sum()
+            print(f"  {name:22s} {total:7d} {c[1].sum() / total:14.3f} {tracks / total:11.3f} "
+                  f"{c[:, 1].sum():13d} {c[:, 2].sum():12d} {c[1, 0]:12d} {c[0, 1:].sum():12d}")
 
 
 def main() -> None:
