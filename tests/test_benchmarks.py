@@ -124,6 +124,7 @@ CASES: dict[str, tuple[list[str], str]] = {
          "--check"],
         r"discs an image saw through or again along the track planner's runs, moving tuning worlds "
         r"7000-7001 \(quick profile\)[\s\S]*\n  found again +\d+ +\d\.\d{3} +\d\.\d{3}"
+        r"[\s\S]*\nghosts kept after an image[^\n]*\n[^\n]*\n  track( +\d+){4}\n  ghosts( +\d+){4}\n"
         rf"[\s\S]*episodes, worlds 7000-7001 of {TUNING} \(tuning\), moving course, quick profile:"
         r"[\s\S]*\n +track +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}"
         r"[\s\S]*\n'neither' won exactly the worlds ghosts won: True",
