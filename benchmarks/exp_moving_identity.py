@@ -225,17 +225,21 @@ class CheckedMap(IdentityMap):
     a new disc belongs to it; not found, standing or walking; no cylinder under the disc) and which rule says
     it was found: a new disc landed on it (``ghosts``), the tracks (:meth:`IdentityMap.found`, and how):
     ``counts[truth, landed, how]``; and the ghosts its own rules keep after each image, by the truth of the
-    disc each was made from: ``alive[truth]``. Both kept across episodes."""
+    disc each was made from: ``alive[truth]``; and the ghosts made of a cylinder found again, by the new disc
+    that found it (untracked, a first sight, continuing another track): ``double``. All kept across
+    episodes."""
 
     ids: np.ndarray
     counts: np.ndarray
     alive: np.ndarray
+    double: np.ndarray
 
     def reset(self) -> None:
         super().reset()
         self.ids = np.zeros(0, int)
         if not hasattr(self, "counts"):
             self.counts, self.alive = np.zeros((len(TRUTHS), 2, 3), int), np.zeros(len(TRUTHS), int)
+            self.double = np.zeros(3, int)
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         kept = super().move(dx, dy)
@@ -254,16 +258,20 @@ class CheckedMap(IdentityMap):
             self.counts[truths[k], int(landed[k]), int(found[k])] += 1
         held = list(self.ghosts)  # held, so that no new ghost takes the id of one dropped here
         before = {id(g) for g in held}
+        names, strange = self.new_names(new)
         kept = super()._merge(obs, d, new, other)
         for g in self.ghosts:
             if id(g) not in before:
                 g["truth"] = int(truths[g["from"]])
+                if g["truth"] == 0:  # its cylinder's new disc: untracked, a first sight, another track's
+                    j = int(np.flatnonzero(own == self.ids[g["from"]])[0])
+                    self.double[0 if names[j] < 0 else 1 if strange[j] else 2] += 1
             self.alive[g["truth"]] += 1
         self.ids = np.r_[own, self.ids[kept]]
         return kept
 
 
-def agreement(args: tuple[Profile, list[int], str]) -> tuple[np.ndarray, np.ndarray]:
+def agreement(args: tuple[Profile, list[int], str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:class:`CheckedMap`'s counts along the runs on ``seeds`` of the planner ``variant`` names."""
     profile, seeds, variant = args
     planner = identity_planner(profile, variant)
@@ -274,7 +282,7 @@ def agreement(args: tuple[Profile, list[int], str]) -> tuple[np.ndarray, np.ndar
     sim = FastSimulator(profile.sim)
     for seed in seeds:
         run_episode(planner, sim, seed, profile.sim.max_primitives)
-    return planner.map.counts, planner.map.alive
+    return planner.map.counts, planner.map.alive, planner.map.double
 
 
 def identity_planner(profile: Profile, variant: str):
@@ -292,7 +300,8 @@ def identity_planner(profile: Profile, variant: str):
     return planner
 
 
-def report(counts: np.ndarray, alive: dict[str, np.ndarray], first: int, n: int, profile: str) -> None:
+def report(counts: np.ndarray, alive: dict[str, np.ndarray], double: dict[str, np.ndarray], first: int,
+           n: int, profile: str) -> None:
     """Print :func:`agreement`'s counts: per truth, how often each rule says the cylinder was found, and
     the ghosts each planner keeps after an image."""
     print(f"discs an image saw through or again along the track planner's runs, moving tuning worlds "
@@ -310,6 +319,9 @@ def report(counts: np.ndarray, alive: dict[str, np.ndarray], first: int, n: int,
     print(f"  {'planner':10s} " + " ".join(f"{t:>20s}" for t in TRUTHS))
     for variant, a in alive.items():
         print(f"  {variant:10s} " + " ".join(f"{int(x):20d}" for x in a))
+    for variant, (untracked, first_sight, other) in double.items():
+        print(f"ghosts {variant} made of a cylinder the same image found again, by the new disc that found "
+              f"it: untracked {untracked}, a first sight {first_sight}, continuing another track {other}")
 
 
 def main() -> None:
@@ -332,14 +344,14 @@ def main() -> None:
         identity_planner(profile, name)  # a bad name fails before any world runs
     if args.agreement:
         seeds = [int(s) for s in eval_world_seeds(args.start + args.agreement, 1)[args.start:]]
-        counts, alive = None, {}
+        counts, alive, double = None, {}, {}
         for variant in ("track", "ghosts"):  # ghosts: the map with neither rule, as ``--check`` shows
             parts = map_tasks(agreement, [(profile, seeds[i : i + 10], "track" if variant == "track" else
                                            NEITHER) for i in range(0, len(seeds), 10)],
                               workers=args.workers, desc=f"agreement ({variant})", unit="10 worlds")
             counts = sum(p[0] for p in parts) if counts is None else counts
-            alive[variant] = sum(p[1] for p in parts)
-        report(counts, alive, args.start, args.agreement, profile.name)
+            alive[variant], double[variant] = sum(p[1] for p in parts), sum(p[2] for p in parts)
+        report(counts, alive, double, args.start, args.agreement, profile.name)
     names = [*args.variants, *(["ghosts", NEITHER] if args.check else [])]
     names = list(dict.fromkeys(names))
     if not names:
