@@ -33,7 +33,11 @@ with their draws from the course's prior: nothing privileged):
 ``ghosts`` is ``exp_moving_doubt_memory.py``'s ghosts as they are (a ghost ends on any new disc over an open
 walk; made only where no new disc landed on the dropped one). Each variant runs as a planner on the same
 tuning worlds as the planner as it is: success with its exact interval, the worlds won only with / only
-without it, exact sign test.
+without it, exact sign test. ``--check`` adds :data:`NEITHER` (the identity map with neither rule, on the
+named tracks), which must win exactly the worlds ``ghosts`` wins, or the script fails. ``--agreement N``
+counts, along the ``track`` planner's runs on ``N`` tuning worlds (privileged: :class:`CheckedMap`), which
+rule says each dropped disc's cylinder was found again, against what became of it; then the ghosts the
+``track`` and the ``ghosts`` planners keep, by the truth of the disc each was made from.
 
 The rule for choosing, written down after the first slice ran and before the second: the variant is chosen
 on tuning worlds 7,000-8,999 (both slices, by worlds won only with it less worlds won only without), and the
