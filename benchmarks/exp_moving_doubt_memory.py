@@ -191,19 +191,25 @@ class DoubtingMap(WalkingDiscMap):
                 g["open"] &= ~self.seen_through(g, d)
             self.ghosts = [g for g in self.ghosts if g["open"].any() and not found(g, new)]
             seen, landed = self.forgotten(d, new)
-            h = self.arrivals.hypotheses
             for k in np.flatnonzero(seen & ~landed):
-                (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
-                g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
-                     "open": np.ones(len(h), bool), "life": age,  # its walks from where its disc was made
-                     "id": int(self.ids[k]) if "told" in self.doubts else -1}
-                g["open"] &= ~self.seen_through(g, d)
-                if age <= GHOST_AGE and g["open"].any() and not found(g, new):
+                g = self.ghost(k, d)
+                if g["life"] <= GHOST_AGE and g["open"].any() and not found(g, new):
                     self.ghosts.append(g)
         kept = super()._merge(obs, d, new, other)
         if "told" in self.doubts:  # new discs first, as the map keeps them
             self.ids = np.r_[belonging(new, self.truth[0]) if len(new) else np.zeros(0, int), self.ids[kept]]
         return kept
+
+    def ghost(self, k: int, d: np.ndarray) -> dict:
+        """A ghost of remembered disc ``k``: ``x, r``, one hypothesis per walk from where its disc was made
+        (``ys, vs``), those the image of per-column depth ``d`` saw through closed (``open``), its ``life``
+        (the disc's age, at least 1) and, with ``told``, its cylinder (``id``; -1 otherwise)."""
+        h, (x, y, r), age = self.arrivals.hypotheses, self.discs[k], max(int(self.age[k]), 1)
+        told = int(self.ids[k]) if "told" in self.doubts else -1
+        g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
+             "open": np.ones(len(h), bool), "life": age, "id": told}
+        g["open"] &= ~self.seen_through(g, d)
+        return g
 
     def seen_through(self, ghost: dict, d: np.ndarray) -> np.ndarray:
         """Per hypothesis of ``ghost``: a column of the image of per-column depth ``d`` saw through its circle

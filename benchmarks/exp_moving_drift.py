@@ -284,14 +284,10 @@ class ExactGhostMap(doubt.DoubtingMap):
             g["open"] &= ~self.seen_through(g, d)
         self.ghosts = [g for g in self.ghosts if kept(g)]
         seen, landed = self.forgotten(d, new)
-        h = self.arrivals.hypotheses
         made = seen if "all" in self.exact else seen & ~landed  # ``all``: a new disc landed on it too
-        for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts
-            (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
-            g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
-                 "open": np.ones(len(h), bool), "life": age, "id": int(self.ids[k])}
-            g["open"] &= ~self.seen_through(g, d)
-            if age <= doubt.GHOST_AGE and kept(g):
+        for k in np.flatnonzero(made):
+            g = self.ghost(k, d)
+            if g["life"] <= doubt.GHOST_AGE and kept(g):
                 self.ghosts.append(g)
         out = super(doubt.DoubtingMap, self)._merge(obs, d, new, other)
         self.ids = np.r_[own, self.ids[out]]

@@ -212,14 +212,9 @@ class IdentityMap(doubt.DoubtingMap):
         self.ghosts = [g for g in self.ghosts if not ended(g)]
         seen, landed = self.forgotten(d, new)
         made = seen & ~(self.found(new, names, strange) > 0 if make else landed)
-        h = self.arrivals.hypotheses
-        for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts: its walks from where it was made
-            (x, y, r), age = self.discs[k], max(int(self.age[k]), 1)
-            g = {"x": x, "r": r, "ys": y + (h - self.speeds[k]) * age, "vs": h.copy(),
-                 "open": np.ones(len(h), bool), "life": age, "id": -1, "name": int(self.names[k]),
-                 "from": int(k)}
-            g["open"] &= ~self.seen_through(g, d)
-            if age <= doubt.GHOST_AGE and not ended(g):
+        for k in np.flatnonzero(made):  # as DoubtingMap makes its ghosts, each with its disc's track's name
+            g = self.ghost(k, d) | {"name": int(self.names[k]), "from": int(k)}
+            if g["life"] <= doubt.GHOST_AGE and not ended(g):
                 self.ghosts.append(g)
         kept = super(doubt.DoubtingMap, self)._merge(obs, d, new, other)
         self.names = np.r_[names, self.names[kept]]
