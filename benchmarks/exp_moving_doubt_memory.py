@@ -132,7 +132,7 @@ class DoubtingMap(WalkingDiscMap):
 
     def reset(self) -> None:
         super().reset()
-        self.birth, self.age = np.zeros((0, len(self.arrivals.hypotheses))), np.zeros(0, int)
+        self.birth = np.zeros((0, len(self.arrivals.hypotheses)))  # its age: the library map's ``age``
         self.ghosts: list[dict] = []  #: ``ghosts``: per dropped disc, ``x, r``, hypotheses ``ys, vs, open``
         self.draw: list[int] | None = None  #: a draw's hypothesis per ghost (None: the ghosts left out)
         self.ids = np.zeros(0, int)  #: ``told``: per disc, the cylinder it belongs to (-1: none)
@@ -170,11 +170,10 @@ class DoubtingMap(WalkingDiscMap):
         self.fresh = np.r_[first[cyl], self.fresh[kept]]
         self.doubt = np.r_[doubt[cyl], np.zeros((int(kept.sum()), doubt.shape[1]))]
         self.birth = np.r_[born[cyl], self.birth[kept]]
-        self.age = np.r_[np.zeros(int(cyl.sum()), int), self.age[kept]]
 
     def move(self, dx: float, dy: float) -> np.ndarray:
         kept = super().move(dx, dy)
-        self.birth, self.age = self.birth[kept], self.age[kept] + 1
+        self.birth = self.birth[kept]
         if "told" in self.doubts:
             self.ids = self.ids[kept]
         for g in self.ghosts:  # dead reckoning, then one step of each hypothesis's walk (bouncing)
@@ -306,7 +305,8 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
     y_true = [None if g["id"] < 0 else m.truth[0][g["id"], 1] for g in m.ghosts]  # ``told``'s truth
     told = [None if y is None else int(np.argmin(np.where(g["open"], np.abs(g["ys"] - y), np.inf)))
             for g, y in zip(m.ghosts, y_true, strict=True)]  # the open hypothesis nearest its cylinder now
-    if not (len(weights) or tracked.any() or len(index) or ghosts):
+    lib = m.dropped.weights() if m.dropped is not None else []  # the library's ghosts, drawn as it draws them
+    if not (len(weights) or tracked.any() or len(index) or ghosts or lib):
         return Tally.undrawn(planner.ties, choice, keys, lattice)
     rng = np.random.default_rng((planner._key, planner._remaining))
     later = np.random.default_rng((planner._key, planner._remaining, 7))  # the driver's draws unchanged
@@ -336,10 +336,15 @@ def decide(planner, horizon: int) -> tuple[int, np.ndarray]:
             if "told" in m.doubts:  # or at the open one nearest its cylinder now, in every draw
                 m.draw = [d if t is None else t for t, d in zip(told, m.draw, strict=True)]
             speeds[slots:] = m._slots()[1]
+        if lib:  # the planner's points end with the library's ghosts' slots (DiscTrackingPlanner.points)
+            m.dropped.draw = [int(later.choice(len(h), p=w)) for w in lib]
+            speeds = np.r_[speeds, m.dropped.slots()[1]]
         try:
             tally.add(planner._keys_if(horizon, speeds), planner._drawn)
         finally:
             m.discs[:, 1], m.draw = y0, None
+            if m.dropped is not None:
+                m.dropped.draw = None
     return tally.ranked()
 
 
@@ -377,6 +382,8 @@ def doubting_planner(profile: Profile, variant: str):
         planner.__class__, doubts = ToldPlanner, doubts | {"ghosts"}
     planner.map.__class__ = DoubtingMap
     planner.map.doubts = doubts
+    if "ghosts" in doubts:  # these ghosts in place of the library's (ArrivalsConfig.ghosts)
+        planner.map.dropped = None
     planner.map.reset()
     planner._decide = lambda horizon: decide(planner, horizon)
     return planner

@@ -15,9 +15,11 @@ The camera's own answer to "which new disc is which cylinder" is the tracks
 so a new disc either *continues* a track that was there before this image, or is a first sight (a new
 track), or lies on a piece too long to track (over 1 m: a wall, or several things read as one).
 
-Every disc here carries the name of its piece's track (:class:`NamedTracks`: a name per track, kept while
-the track is continued). The rules (:class:`IdentityMap`, on the ghosts of ``exp_moving_doubt_memory.py``,
-with their draws from the course's prior: nothing privileged):
+Every disc here carries the name of its piece's track (a name per track, kept while the track is
+continued: this script's ``NamedTracks`` gave them from outside the library until ``track`` joined the
+library, whose :class:`~husky_course.planners.motion.Tracks` now name their tracks, the same names). The
+rules (:class:`IdentityMap`, on the ghosts of ``exp_moving_doubt_memory.py``, with their draws from the
+course's prior: nothing privileged):
 
 * ``track-end``: a ghost ends when a new disc continues its own track, or when a new disc that continues no
   earlier track (a first sight, or untracked) overlaps one of its open walks; a new disc continuing another
@@ -60,7 +62,6 @@ from exp_moving_memory import belonging
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.engines import map_tasks
 from husky_course.evaluation.episodes import eval_world_seeds, run_episode
-from husky_course.planners.motion import Tracks
 from husky_course.sim.fast import FastSimulator
 
 MEASURED = """
@@ -120,65 +121,16 @@ RULES = ("ghosts", "track", "track-end", "track-make")  #: the variants (module 
 NEITHER = "neither"
 
 
-class NamedTracks(Tracks):
-    """:class:`~husky_course.planners.motion.Tracks` that name each track: ``names`` is aligned with
-    ``tracks``; after :meth:`update`, per piece it was given, ``piece_names`` (its track's name, -1: a piece
-    too long to track) and ``continued`` (its track was there before this image)."""
-
-    names: list[int]
-    piece_names: np.ndarray
-    continued: np.ndarray
-    counter: int
-
-    def reset(self) -> None:
-        super().reset()
-        self.names, self.counter = [], 0
-        self.piece_names, self.continued = np.zeros(0, int), np.zeros(0, bool)
-
-    def update(self, pieces: list[np.ndarray], now: np.ndarray,
-               centres: np.ndarray | None = None) -> np.ndarray:
-        old, names = list(self.tracks), list(self.names)
-        v = super().update(pieces, now, centres)
-        small = [k for k, idx in enumerate(pieces) if np.ptp(now[idx], axis=0).max() <= 1.0]
-        self.names = []
-        for t in self.tracks:  # a lost track is the same array; a continued one ends with its last look
-            name = next((n for o, n in zip(old, names, strict=True)
-                         if o is t or (len(t) > 1 and np.array_equal(t[-2], o[-1]))), -1)
-            if name < 0:
-                name, self.counter = self.counter, self.counter + 1
-            self.names.append(name)
-        self.piece_names, self.continued = np.full(len(pieces), -1), np.zeros(len(pieces), bool)
-        for j, k in enumerate(small):  # the first tracks are this image's small pieces, in order
-            self.piece_names[k], self.continued[k] = self.names[j], len(self.tracks[j]) > 1
-        return v
-
-
 class IdentityMap(doubt.DoubtingMap):
     """``exp_moving_doubt_memory.py``'s ghosts, ended and made by the tracks' identity as :attr:`rule`
     names (module docstring). ``names``: per disc, its piece's track's name when it was made (-1: none)."""
 
     rule: frozenset[str]
-    names: np.ndarray
-
-    def reset(self) -> None:
-        super().reset()
-        self.names = np.zeros(0, int)
-
-    def decode(self, d: np.ndarray, cols: np.ndarray, pts: np.ndarray, pieces: list[np.ndarray]):
-        out = super().decode(d, cols, pts, pieces)
-        self._cylinder = out[1]  # which pieces become discs (``new`` in :meth:`_merge`, in order)
-        return out
-
-    def move(self, dx: float, dy: float) -> np.ndarray:
-        kept = super().move(dx, dy)
-        self.names = self.names[kept]
-        return kept
 
     def new_names(self, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(names, strange)`` per disc of ``new``: its piece's track's name (-1: none), and whether it
         continues no earlier track (a first sight, or a piece too long to track)."""
         tracks = self.motion.tracks
-        assert isinstance(tracks, NamedTracks)
         if not len(new):
             return np.zeros(0, int), np.zeros(0, bool)
         return tracks.piece_names[self._cylinder], ~tracks.continued[self._cylinder]
@@ -216,9 +168,7 @@ class IdentityMap(doubt.DoubtingMap):
             g = self.ghost(k, d) | {"name": int(self.names[k]), "from": int(k)}
             if g["life"] <= doubt.GHOST_AGE and not ended(g):
                 self.ghosts.append(g)
-        kept = super(doubt.DoubtingMap, self)._merge(obs, d, new, other)
-        self.names = np.r_[names, self.names[kept]]
-        return kept
+        return super(doubt.DoubtingMap, self)._merge(obs, d, new, other)  # the library's names kept there
 
 
 class CheckedMap(IdentityMap):
@@ -279,7 +229,6 @@ def agreement(args: tuple[Profile, list[int], str]) -> tuple[np.ndarray, np.ndar
     planner = identity_planner(profile, variant)
     planner.__class__ = doubt.ToldPlanner  # eyes for the counts only: the ghosts' draws are not told
     planner.map.__class__ = CheckedMap
-    planner.map.motion.tracks.__class__ = NamedTracks
     planner.map.reset()
     sim = FastSimulator(profile.sim)
     for seed in seeds:
@@ -297,7 +246,6 @@ def identity_planner(profile: Profile, variant: str):
         planner.map.__class__ = IdentityMap
         rules = {"track": {"end", "make"}, NEITHER: set()}.get(variant, {variant[6:]})
         planner.map.rule = frozenset(rules)
-        planner.map.motion.tracks.__class__ = NamedTracks
         planner.map.reset()
     return planner
 

@@ -288,3 +288,17 @@ class ArrivalsConfig:
     #: the tracker's ``samples``. Off: with 16 draws it crossed 0.749 against 0.741 on worlds 0-999 of the
     #: tuning set (38 / 30), at about five times the time per decision
     tracker_samples: int = 0
+    #: the disc planner keeps a disc its map drops (an image saw through or past it, and the tracks say no
+    #: new disc is its cylinder) as a *ghost*: one hypothesis per walk of :attr:`hypotheses` from where its
+    #: disc was last made, those an image sees through ruled out, each of ``samples``' draws standing it at
+    #: one open walk drawn from the course's motion model (:mod:`~husky_course.planners.ghosts`). Chosen on
+    #: episodes, full profile, tuning worlds 7,000-8,999 (``benchmarks/exp_moving_identity.py``, won only
+    #: with / only without, against the planner without ghosts, 0.838 / 0.862): ghosts ended and made by
+    #: the tracks' names, 0.844 / 0.870 (12 / 6, 16 / 8); ghosts ended by any new disc over an open walk
+    #: (no identity), 0.838 / 0.865 (3 / 3, 7 / 4), and 21 / 19 on 9,000-12,999. The choice was tested, as
+    #: written down before the test ran, on tuning worlds 9,000-12,999 (0.844 / 0.837 / 0.855 / 0.852
+    #: without): 0.849 / 0.842 / 0.858 / 0.867 (11 / 6, 14 / 9, 12 / 9, 20 / 5; pooled 57 / 29, p = 0.003)
+    ghosts: bool = True
+    #: steps after its disc was last made that a ghost is kept: 4 and 8 won the same worlds on tuning worlds
+    #: 7,000-8,999 (``benchmarks/exp_moving_doubt_memory.py``, ghosts without identity), the tie taken by 4
+    ghost_age: int = 4

@@ -51,6 +51,11 @@ class Tracks:
     walk per step since when it is not (one look only). A track not seen for ``keep`` steps is
     dropped; a piece over 1 m long (a wall, or several things) is never tracked.
 
+    Each track has a name, kept while pieces continue it (:attr:`names`); after :meth:`update`, per piece
+    it was given, :attr:`piece_names` (its track's name; -1: a piece too long to track) and
+    :attr:`continued` (it joined a track an earlier image made): the camera's own answer to "which
+    cylinder is this piece", which the disc map's ghosts use (:mod:`.ghosts`).
+
     With ``prior`` ``(moving fraction, slowest, fastest walk per step)``, the course's motion model,
     the line's slope is *judged* (:meth:`judged`): a cylinder either stands or walks at a speed in
     that range, so a slope its standard error cannot tell from 0 as well as from a walk is read
@@ -74,12 +79,17 @@ class Tracks:
         self.column = column  # the tangent step between two columns
         self.half_tangent = half_tangent  # the tangent of half the field of view
         self.looks, self.keep, self.gate, self.x_gate = looks, keep, gate, x_gate
-        self.tracks: list[np.ndarray] = []
-        self.fresh = np.zeros(0, bool)  #: per point of the last scan: its piece was seen for the first time
+        self.reset()
 
     def reset(self) -> None:
         """Forget every track."""
-        self.tracks, self.fresh = [], np.zeros(0, bool)
+        self.tracks: list[np.ndarray] = []
+        self.fresh = np.zeros(0, bool)  #: per point of the last scan: its piece was seen for the first time
+        self.names: list[int] = []  #: per track of :attr:`tracks`, its name
+        #: per piece of the last :meth:`update`: its track's name (-1: none), whether it joined an older track
+        self.piece_names = np.zeros(0, int)
+        self.continued = np.zeros(0, bool)
+        self._named = 0  # names given so far
 
     def move(self, dx: float, dy: float) -> None:
         """Dead reckoning: every sighting moves by ``(-dx, -dy)``."""
@@ -168,6 +178,7 @@ class Tracks:
         v = np.zeros(len(now))
         for t in self.tracks:
             t[:, 0] += 1
+        given = len(pieces)
         small = [k for k, idx in enumerate(pieces) if np.ptp(now[idx], axis=0).max() <= 1.0]
         pieces = [pieces[k] for k in small]
         seen = np.array([self.sighting(now[idx]) for idx in pieces]).reshape(-1, 3)
@@ -190,19 +201,25 @@ class Tracks:
                 break
             if i not in joined and k not in joined.values():
                 joined[int(i)] = int(k)
-        tracks = []
+        tracks, names = [], []
         self.fresh = np.zeros(len(now), bool)
         for i, idx in enumerate(pieces):
             look = np.r_[0.0, seen[i]][None]
             if i in joined:
                 track = np.concatenate([self.tracks[joined[i]], look])[-self.looks :]
                 v[idx] = self.judged(track)
+                names.append(self.names[joined[i]])
             else:
                 track = look
                 self.fresh[idx] = True
+                names.append(self._named)
+                self._named += 1
             tracks.append(track)
-        lost = [t for k, t in enumerate(self.tracks) if k not in joined.values() and t[-1, 0] < self.keep]
-        self.tracks = tracks + lost
+        lost = [k for k, t in enumerate(self.tracks) if k not in joined.values() and t[-1, 0] < self.keep]
+        self.tracks = tracks + [self.tracks[k] for k in lost]
+        self.names = names + [self.names[k] for k in lost]
+        self.piece_names, self.continued = np.full(given, -1), np.zeros(given, bool)
+        self.piece_names[small], self.continued[small] = names, [i in joined for i in range(len(small))]
         return v
 
 

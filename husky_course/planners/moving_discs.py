@@ -10,7 +10,9 @@ tracker (:class:`~husky_course.planners.tracking.TrackingPlanner`) searches its 
 draws of what it doubts: the undecided first sights' walks and the tracked walkers' speeds
 (:class:`~husky_course.config.ArrivalsConfig`'s ``samples`` and ``speed_sigma``), its ties going to the
 plan that keeps the most clearance in the worst draw, then to the first primitive whose safe plans still
-reach the most places at the horizon's end (its *options*, ``ties``).
+reach the most places at the horizon's end (its *options*, ``ties``). With ``ghosts`` its map keeps
+the discs it drops where the tracks say no new disc is their cylinder, and its draws stand each at one
+of the walks no image has ruled out (:mod:`~husky_course.planners.ghosts`).
 The measurements behind each choice are in :mod:`~husky_course.planners.discs`,
 :mod:`~husky_course.planners.arrivals` and :class:`~husky_course.config.WallsConfig`.
 """
@@ -24,6 +26,7 @@ from ..models.discs import DiscNet
 from .arrivals import Arrivals
 from .cuts import PieceCutter
 from .discs import DiscMap, DiscPlanner
+from .ghosts import Ghosts
 from .motion import MotionMemory
 from .tracking import TrackingPlanner, _set_doubt
 from .walls import NO_WALLS, walk_on, wall_faces
@@ -38,11 +41,18 @@ class WalkingDiscMap(DiscMap):
     a first sight's from the earlier images, :meth:`first_sights`); after every step a
     remembered disc walks on by it. Walls, and the points no disc explains, stand. On the static
     course every velocity is 0 and it is the :class:`DiscMap`. ``faces``: the walls' (:mod:`.walls`).
+
+    Each disc also carries its age (steps since an image made it) and its piece's track's name
+    (:class:`~husky_course.planners.motion.Tracks`; -1: none). With ``ghosts`` (the moving course only), a
+    disc dropped where the tracks say no new disc is its cylinder is kept as a ghost (:mod:`.ghosts`,
+    :attr:`dropped`), kept at most ``ghost_age`` steps after its disc was made; the planner's draws
+    stand it at one of its walks (:class:`DiscTrackingPlanner`).
     """
 
     def __init__(self, model: DiscNet, config: SimConfig | None = None, forget_behind: float = 1.8,
                  unexplained: float = 0.05, widen: float = 0.0, arrivals: bool = True,
-                 centres: bool = TrackingConfig.disc_centres) -> None:
+                 centres: bool = TrackingConfig.disc_centres, ghosts: bool = ArrivalsConfig.ghosts,
+                 ghost_age: int = ArrivalsConfig.ghost_age) -> None:
         super().__init__(model, config, forget_behind, unexplained)
         self.motion = MotionMemory(config or SimConfig())
         self.centres = bool(centres)  #: the tracks locate a cylinder's piece by its disc's centre
@@ -52,6 +62,9 @@ class WalkingDiscMap(DiscMap):
         self.width, self.faces, self.wall_rule = (config or SimConfig()).world.width, NO_WALLS, WallsConfig()
         self.walks = float(getattr((config or SimConfig()).world, "moving_fraction", 0.0))
         self.doubt = np.zeros((0, len(self.arrivals.hypotheses)))
+        #: the dropped discs kept as ghosts (None: off, or the static course)
+        self.dropped = Ghosts(self.arrivals, self.walks, ghost_age) if ghosts and self.walks > 0 else None
+        self.age, self.names = np.zeros(0, int), np.zeros(0, int)
 
     def reset(self) -> None:
         super().reset()
@@ -59,6 +72,9 @@ class WalkingDiscMap(DiscMap):
         self.speeds, self.fresh, self.faces = np.empty(0), np.zeros(0, bool), NO_WALLS
         self.arrivals.reset()
         self.doubt = np.zeros((0, len(self.arrivals.hypotheses)))
+        self.age, self.names = np.zeros(0, int), np.zeros(0, int)
+        if getattr(self, "dropped", None) is not None:
+            self.dropped.reset()
 
     @property
     def points(self) -> np.ndarray:
@@ -110,6 +126,26 @@ class WalkingDiscMap(DiscMap):
         self.fresh = np.r_[first[cyl], self.fresh[kept]]
         self.doubt = np.r_[doubt[cyl], np.zeros((int(kept.sum()), doubt.shape[1]))]
 
+    def decode(self, d: np.ndarray, cols: np.ndarray, pts: np.ndarray,
+               pieces: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        out = super().decode(d, cols, pts, pieces)
+        self._cylinder = out[1]  # which pieces become discs: the new discs' tracks (:meth:`_merge`)
+        return out
+
+    def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
+        """:meth:`DiscMap._merge`, the ghosts told the image first; the new discs' ages and names kept."""
+        names, strange = np.full(len(new), -1), np.ones(len(new), bool)
+        tracks = self.motion.tracks
+        if len(new) and self.motion.max_step > 0:  # the moving course: the tracks named this image's pieces
+            names, strange = tracks.piece_names[self._cylinder], ~tracks.continued[self._cylinder]
+        if self.dropped is not None:
+            seen = self.forgotten(d, new)[0]
+            self.dropped.update(d, self.discs, self.speeds, self.age, self.names, seen, new, names, strange)
+        kept = super()._merge(obs, d, new, other)
+        self.age = np.r_[np.zeros(len(new), int), self.age[kept]]
+        self.names = np.r_[names, self.names[kept]]
+        return kept
+
     def first_sights(self, discs: np.ndarray, cyl: np.ndarray, speed: np.ndarray,
                      first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(speed, first)`` per piece of an image, its first sights read (``discs (n, 3)`` its
@@ -131,6 +167,9 @@ class WalkingDiscMap(DiscMap):
                                 self.wall_rule)
         self.discs[:, 1], self.speeds = walk_on(self.discs, self.speeds, self.faces)
         self.motion.move(dx, dy)
+        self.age, self.names = self.age[kept] + 1, self.names[kept]
+        if self.dropped is not None:
+            self.dropped.move(dx, dy, self.faces, self.forget_behind)
         return kept
 
 
@@ -154,10 +193,13 @@ class DiscTrackingPlanner(DiscPlanner):
                  doubt_hard: bool = ArrivalsConfig.doubt_hard, hedge: bool = ArrivalsConfig.hedge,
                  first_samples: int = ArrivalsConfig.first_samples, samples: int = ArrivalsConfig.samples,
                  speed_sigma: float = ArrivalsConfig.speed_sigma, centres: bool = TrackingConfig.disc_centres,
-                 cutter: PieceCutter | None = None, ties: str = ArrivalsConfig.ties, **kwargs: float) -> None:
+                 cutter: PieceCutter | None = None, ties: str = ArrivalsConfig.ties,
+                 ghosts: bool = ArrivalsConfig.ghosts, ghost_age: int = ArrivalsConfig.ghost_age,
+                 **kwargs: float) -> None:
         super().__init__(model, config, grow, unexplained, **kwargs)
         self.map = WalkingDiscMap(  # type: ignore[assignment]
-            model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres)
+            model, self.config, self.map.forget_behind, unexplained, widen, arrivals, centres, ghosts,
+            ghost_age)
         self.map.cutter = cutter
         _set_doubt(self, doubt_steps, doubt_hard, hedge, first_samples, samples, speed_sigma, ties)
 
@@ -176,6 +218,17 @@ class DiscTrackingPlanner(DiscPlanner):
         return np.r_[walking, np.zeros(len(self.points) - len(walking), bool)]
 
     @property
+    def points(self) -> np.ndarray:
+        """The map's points (:meth:`DiscPlanner.points`), then, within one of :meth:`_decide`'s draws, one
+        slot per ghost of the map (:mod:`.ghosts`) where the draw stands it."""
+        return np.concatenate([super().points, self._ghost_slots()[0]])
+
+    @property
     def velocity(self) -> np.ndarray:
-        """Each point's lateral velocity (m per step): the discs' estimates, 0 for walls."""
-        return self.map.velocity  # type: ignore[attr-defined]
+        """Each point's lateral velocity (m per step): the discs' estimates, 0 for walls, then the
+        ghosts' slots' walks."""
+        return np.r_[self.map.velocity, self._ghost_slots()[1]]  # type: ignore[attr-defined]
+
+    def _ghost_slots(self) -> tuple[np.ndarray, np.ndarray]:
+        ghosts = getattr(self.map, "dropped", None)
+        return ghosts.slots() if ghosts is not None else (np.empty((0, 3)), np.empty(0))

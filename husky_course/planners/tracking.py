@@ -180,7 +180,10 @@ class TrackingPlanner(MappingPlanner):
           the rank of the map's own velocities; or by the draws' clearance first; or by that and then
           the draws' options, :func:`reachable_ends`). Drawn from the episode's number and the
           decision's; with neither kind of doubt present, the map's own choice (with ``ties``
-          "options", ties of its safe steps and clearance go to its options).
+          "options", ties of its safe steps and clearance go to its options). The disc map's ghosts
+          (:mod:`~husky_course.planners.ghosts`; its ``dropped``) are drawn too: in each draw every ghost
+          stands at one of its open walks, drawn from the course's motion model (from a generator of its
+          own, so that the other draws stay as they were), and walks at it.
         * ``first_samples``: the first decision has one image, so every cylinder in view is a first
           sight the arrivals rule cannot judge. Each of ``first_samples`` samples draws, for every
           doubtful piece on its own (points closer than 0.3 m to one another: one disc, or one
@@ -205,8 +208,11 @@ class TrackingPlanner(MappingPlanner):
             return choice, keys
         group, weights = self.map.walk_doubt if self.samples else (None, ())
         tracked = self.tracked if self.samples and self.speed_sigma > 0 else np.zeros(0, bool)
-        if len(weights) or tracked.any():
+        ghosts = getattr(self.map, "dropped", None) if self.samples else None  # the disc map's (.ghosts)
+        ghost_weights = ghosts.weights() if ghosts is not None else []
+        if len(weights) or tracked.any() or ghost_weights:
             rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
+            later = np.random.default_rng((self._key, self._remaining, 7))  # the ghosts' draws
             tally, base, k = Tally(self.ties, keys), self.velocity, int(tracked.sum())
             drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
             for _ in range(self.samples):
@@ -216,7 +222,14 @@ class TrackingPlanner(MappingPlanner):
                     speeds = np.where(drawn_ones, drawn[np.maximum(group, 0)], speeds)
                 if k:
                     speeds[tracked] += rng.normal(0.0, self.speed_sigma, k)
-                tally.add(self._keys_if(horizon, speeds), self._drawn)
+                if ghost_weights:  # each ghost at an open walk, its slot joining the points for this draw
+                    ghosts.draw = [int(later.choice(len(h), p=w)) for w in ghost_weights]
+                    speeds = np.r_[speeds, ghosts.slots()[1]]
+                try:
+                    tally.add(self._keys_if(horizon, speeds), self._drawn)
+                finally:
+                    if ghosts is not None:
+                        ghosts.draw = None
             return tally.ranked()
         doubtful = self.doubtful
         if not doubtful.any():
