@@ -132,8 +132,18 @@ class WalkingDiscMap(DiscMap):
         self._cylinder = out[1]  # which pieces become discs: the new discs' tracks (:meth:`_merge`)
         return out
 
+    def _aligned(self) -> None:
+        """Discs set from outside (a test, a privileged reference's told cylinders): those beyond the ones
+        this map made count as made now, by no track."""
+        n = len(self.discs)
+        if len(self.age) != n:
+            keep = min(n, len(self.age))
+            self.age = np.r_[self.age[:keep], np.zeros(n - keep, int)]
+            self.names = np.r_[self.names[:keep], np.full(n - keep, -1)]
+
     def _merge(self, obs: np.ndarray, d: np.ndarray, new: np.ndarray, other: np.ndarray) -> np.ndarray:
         """:meth:`DiscMap._merge`, the ghosts told the image first; the new discs' ages and names kept."""
+        self._aligned()
         names, strange = np.full(len(new), -1), np.ones(len(new), bool)
         tracks = self.motion.tracks
         if len(new) and self.motion.max_step > 0:  # the moving course: the tracks named this image's pieces
@@ -160,6 +170,7 @@ class WalkingDiscMap(DiscMap):
     def move(self, dx: float, dy: float) -> np.ndarray:
         """Dead reckoning; the walls' faces read again; each disc walks on, bouncing off them."""
         self.arrivals.move(dx, dy)
+        self._aligned()
         kept = super().move(dx, dy)
         self.speeds, self.fresh = self.speeds[kept], self.fresh[kept]
         self.doubt = np.zeros((int(kept.sum()), self.doubt.shape[1]))  # the image's doubt is for its decision

@@ -316,6 +316,8 @@ class ToldDiscsPlanner(DiscTrackingPlanner):
                          cutter=disc_cutter(profile, moving=True))
         self.map.__class__ = _ToldMap
         self.map.rule = rule  # type: ignore[attr-defined]
+        if rule == TOLD_RULES[2]:  # every cylinder seen, exactly: nothing dropped to doubt
+            self.map.dropped = None
         self.name = f"discs, told {rule} (privileged)"
 
     def reset(self, start: EpisodeStart) -> None:
