@@ -13,7 +13,9 @@ checkpoints if the profile has them, otherwise seeded untrained models (same cos
 is left out without its trained network). Then the mapping planner's search two ways at every
 decision of those episodes: its path tables against the clearance grid read at 21 samples per edge.
 Last, the moving disc planner's decision two ways at every decision of as many moving-course
-episodes: its draws sharing the standing points' clearances against each draw computing its own.
+episodes: its draws sharing the standing points' clearances against each draw computing its own; and
+that planner's decision with its ghosts (``ArrivalsConfig.ghosts``) against without, each along its own
+runs on the same moving tuning worlds.
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ def main() -> None:
     decisions(get_profile(args.profile), args.episodes)
     searches(get_profile(args.profile), args.episodes)
     draws(get_profile(args.profile), args.episodes)
+    ghost_cost(get_profile(args.profile), args.episodes)
 
 
 def decisions(profile, episodes: int = 20) -> None:
@@ -174,6 +177,33 @@ def draws(profile, episodes: int = 20) -> None:
     shared, alone = (1e3 * float(np.mean(t)) for t in zip(*times, strict=True))
     print(f"the moving disc planner's decision, {len(times)} decisions: draws sharing the standing "
           f"clearances {shared:.2f} ms, each draw its own {alone:.2f} ms: {alone / shared:.2f}x (same keys)")
+
+
+def ghost_cost(profile, episodes: int = 20) -> None:
+    """ms per decision of the moving disc planner with its ghosts and without (``ghosts=False``), each along
+    its own runs on the same ``episodes`` moving tuning worlds, single thread, side by side."""
+    from husky_course.config import with_world
+    from husky_course.evaluation.episodes import eval_world_seeds, run_episode
+    from husky_course.planners.registry import make_planner
+    from husky_course.sim.fast import FastSimulator
+
+    moving = with_world(profile, "moving")
+    try:
+        planners = {f"ghosts {'on' if on else 'off'}": make_planner("discs", profile=profile,
+                                                                   config=moving.sim, ghosts=on)
+                    for on in (True, False)}
+    except Exception as exc:  # noqa: BLE001
+        print(f"(no moving disc planner: {exc})")
+        return
+    sim, ms = FastSimulator(moving.sim), {}
+    with single_thread():
+        for name, planner in planners.items():
+            times = [t for s in eval_world_seeds(episodes, profile.eval.tuning_seed)
+                     for t in run_episode(planner, sim, int(s)).decision_times]
+            ms[name] = (1e3 * float(np.mean(times)), 1e3 * float(np.max(times)), len(times))
+    line = ", ".join(f"{n} {m:.2f} ms mean ({w:.2f} max, {k} decisions)" for n, (m, w, k) in ms.items())
+    print(f"the moving disc planner's decision along its own runs: {line}: "
+          f"{ms['ghosts on'][0] / ms['ghosts off'][0]:.2f}x with its ghosts")
 
 
 if __name__ == "__main__":

@@ -242,6 +242,16 @@ display(Markdown(
 # Most of the lost were neighbours whose pieces the cut had joined, and a shadow whose pieces are cut
 # exactly where two cylinders meet is worth as much as one told every lost cylinder: that is what the
 # disc planner's cut network (chapter 8) learns to do.
+# A disc is also dropped when its cylinder is still there, walking: an image sees through the place
+# where the map last put it, most often a first sight that left the view before a second image could
+# show where it went. The disc planner keeps such a disc as a *ghost*: one guess per walk the course's
+# motion model allows, starting from where its disc was last made; each guess is ruled out once an
+# image sees through it, and every version of the motion stands the ghost at one guess still open.
+# Which new disc is which cylinder decides when a ghost is made and when it ends, and the camera's own
+# answer is the tracks. A new disc that continues the dropped disc's track is its cylinder, however far
+# it is from where the map expected it. A new disc that continues another cylinder's track is not.
+# Where the ghosts stand matters less than which cylinder they belong to; the measurements are in
+# `ArrivalsConfig.ghosts`, `benchmarks/exp_moving_drift.py` and `benchmarks/exp_moving_identity.py`.
 # The **memory student** of chapter 8 is trained again by the same DAgger recipe, on moving worlds,
 # from the space-time oracle; it reads four rasters of the walking map: where its points are now,
 # one step later, *when the robot reaches them*, and which of them were seen only once. Every

@@ -38,7 +38,8 @@ CASES: dict[str, tuple[list[str], str]] = {
         ["--profile", "quick", "--repeats", "5", "--episodes", "2"],
         rf"speed-up +\d+\.\dx[\s\S]*over 2 episodes of {TUNING} \(tuning\)[\s\S]*memory +\d+\.\d\d ms mean"
         r"[\s\S]*path tables \d+\.\d\d ms, clearance grid \d+\.\d\d ms: \d+\.\dx"
-        r"[\s\S]*moving disc planner's decision, \d+ decisions: .* \d+\.\d\dx \(same keys\)",
+        r"[\s\S]*moving disc planner's decision, \d+ decisions: .* \d+\.\d\dx \(same keys\)"
+        r"[\s\S]*along its own runs: ghosts on \d+\.\d\d ms mean .* \d+\.\d\dx with its ghosts",
     ),
     "bench_engines.py": (
         ["--profile", "quick", "--worlds", "4", "--workers", "2", "--noop-tasks", "10"],
