@@ -170,6 +170,19 @@ class Tracks:
         # (9 / 9). The cost is in the judging and the gate a wider sigma widens, not in the line's weights
         return np.array([cx, cy, sigma])
 
+    @staticmethod
+    def join(cost: np.ndarray) -> dict[int, int]:
+        """Which track each piece joins (piece -> track), from ``cost (pieces, tracks)`` (``inf``: outside the
+        gates): greedily, the cheapest pair first, each piece and each track at most once."""
+        joined: dict[int, int] = {}
+        for flat in np.argsort(cost, axis=None):
+            i, k = np.unravel_index(flat, cost.shape)
+            if not np.isfinite(cost[i, k]):
+                break
+            if i not in joined and k not in joined.values():
+                joined[int(i)] = int(k)
+        return joined
+
     def update(self, pieces: list[np.ndarray], now: np.ndarray,
                centres: np.ndarray | None = None) -> np.ndarray:
         """One image's pieces (index arrays into ``now (m, 2)``): the velocity ``(m,)`` of every point.
@@ -194,13 +207,7 @@ class Tracks:
             d = np.abs(seen[:, 1] - y)
             ok = (np.abs(seen[:, 0] - x) < self.x_gate) & (d <= reach)
             cost[ok, k] = (d[ok] / reach[ok]) ** 2 + ((seen[ok, 0] - x) / self.x_gate) ** 2
-        joined: dict[int, int] = {}
-        for flat in np.argsort(cost, axis=None):
-            i, k = np.unravel_index(flat, cost.shape)
-            if not np.isfinite(cost[i, k]):
-                break
-            if i not in joined and k not in joined.values():
-                joined[int(i)] = int(k)
+        joined = self.join(cost)
         tracks, names = [], []
         self.fresh = np.zeros(len(now), bool)
         for i, idx in enumerate(pieces):
