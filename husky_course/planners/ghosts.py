@@ -105,7 +105,7 @@ class Ghosts:
         for g in self.items:
             g.open &= ~self.seen_through(g, d)
         self.items = [g for g in self.items if not self._ended(g, new, new_names, strange)]
-        made = seen & (found(discs, names, new, new_names, strange) == 0)
+        made = seen & (self.found(discs, names, new, new_names, strange) == 0)
         h = self.arrivals.hypotheses
         for k in np.flatnonzero(made):
             (x, y, r), life = discs[k], max(int(ages[k]), 1)
@@ -146,6 +146,13 @@ class Ghosts:
     def weights(self) -> list[np.ndarray]:
         """Per ghost, the course's motion model over its open hypotheses (what each draw is drawn from)."""
         return [self.prior * g.open / (self.prior * g.open).sum() for g in self.items]
+
+    @staticmethod
+    def found(discs: np.ndarray, names: np.ndarray, new: np.ndarray, new_names: np.ndarray,
+              strange: np.ndarray) -> np.ndarray:
+        """Per remembered disc, whether the image found its cylinder (:func:`found`; an experiment may
+        replace the rule here)."""
+        return found(discs, names, new, new_names, strange)
 
     @staticmethod
     def _ended(g: Ghost, new: np.ndarray, new_names: np.ndarray, strange: np.ndarray) -> bool:
