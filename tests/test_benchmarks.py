@@ -126,6 +126,12 @@ CASES: dict[str, tuple[list[str], str]] = {
         r"[\s\S]*\n +optimal\+nearer +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}"
         r"[\s\S]*\n'same' won exactly the planner's worlds: True",
     ),
+    "exp_moving_unseen.py": (  # the draws with nothing unseen must win exactly the planner's worlds
+        ["--profile", "quick", "--worlds", "3", "--workers", "1", "--variants", "unseen-half", "--check"],
+        rf"episodes, worlds 7000-7002 of {TUNING} \(tuning\), moving course, quick profile:"
+        r"[\s\S]*\n +unseen-half +\d\.\d{3} \[.*won only with it: \d+, only without: \d+, p = \d\.\d{3}"
+        r"[\s\S]*\n'none' won exactly the planner's worlds: True",
+    ),
     "exp_moving_identity.py": (  # the identity map with neither rule must win exactly the ghosts' worlds
         ["--profile", "quick", "--agreement", "2", "--worlds", "2", "--workers", "1", "--variants", "track",
          "--check"],
