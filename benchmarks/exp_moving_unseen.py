@@ -63,14 +63,12 @@ episodes of tuning worlds 7,000-7,099; it was not kept.
 
 from __future__ import annotations
 
-import argparse
 import types
-from pathlib import Path
 
 import exp_moving_variants as variants
 import numpy as np
 
-from husky_course.config import Profile, get_profile, with_world
+from husky_course.config import Profile
 from husky_course.planners.ghosts import TINY
 from husky_course.planners.registry import make_planner
 from husky_course.planners.tracking import Tally, TrackingPlanner
@@ -187,30 +185,8 @@ def unseen_planner(profile: Profile, variant: str):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--profile", default="full")
-    parser.add_argument("--worlds", type=int, default=1000)
-    parser.add_argument("--start", type=int, default=7000, help="the first tuning world (evaluation set 1)")
-    parser.add_argument("--variants", nargs="*", default=["unseen", "unseen-half"])
-    parser.add_argument("--check", action="store_true", help="add 'none': it must win the same worlds")
-    parser.add_argument("--base", type=Path, help=variants.BASE_HELP)
-    parser.add_argument("--workers", type=int, default=2)
-    args = parser.parse_args()
-    if args.worlds < 1:
-        raise SystemExit(f"--worlds must be positive; got {args.worlds}")
-    profile = with_world(get_profile(args.profile), "moving")
-    names = list(dict.fromkeys([*args.variants, *(["none"] if args.check else [])]))
-    for name in names:
-        unseen_planner(profile, name)  # a bad name fails before any world runs
-    if not names:
-        return
-    worlds = variants.tuning_worlds(args.start, args.worlds, profile.name)
-    won = variants.paired_episodes(unseen_planner, names, profile, worlds, args.workers, args.base)
-    if args.check:
-        same = bool(np.array_equal(won["none"], won[variants.AS_IT_IS]))
-        print(f"'none' won exactly the planner's worlds: {same}")
-        if not same:
-            raise SystemExit("the planner with nothing unseen drawn is not the planner as it is")
+    variants.rule_main(__doc__, unseen_planner, ["unseen", "unseen-half"], "none",
+                       "the planner with nothing unseen drawn is not the planner as it is")
 
 
 if __name__ == "__main__":

@@ -150,6 +150,38 @@ def tuning_worlds(start: int, n: int, profile: str, seed: int = 1) -> list[int]:
     return [int(s) for s in eval_world_seeds(start + n, seed)[start:]]
 
 
+def rule_main(doc: str, build_variant: Callable[[Profile, str], Planner], default: list[str], same: str,
+              differs: str) -> None:
+    """The command line of an experiment whose variants change rules of the disc planner (``build_variant``,
+    a module-level builder): ``--profile --worlds --start --variants --check --base --workers``, tuning
+    worlds ``start`` onwards; ``--check`` adds the variant ``same``, which must win exactly the planner's
+    worlds (else the run fails with ``differs``)."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--profile", default="full")
+    parser.add_argument("--worlds", type=int, default=1000)
+    parser.add_argument("--start", type=int, default=7000, help="the first tuning world (evaluation set 1)")
+    parser.add_argument("--variants", nargs="*", default=default)
+    parser.add_argument("--check", action="store_true", help=f"add {same!r}: it must win the same worlds")
+    parser.add_argument("--base", type=Path, help=BASE_HELP)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    if args.worlds < 1:
+        raise SystemExit(f"--worlds must be positive; got {args.worlds}")
+    profile = with_world(get_profile(args.profile), "moving")
+    names = list(dict.fromkeys([*args.variants, *([same] if args.check else [])]))
+    for name in names:
+        build_variant(profile, name)  # a bad name fails before any world runs
+    if not names:
+        return
+    worlds = tuning_worlds(args.start, args.worlds, profile.name)
+    won = paired_episodes(build_variant, names, profile, worlds, args.workers, args.base)
+    if args.check:
+        agree = bool(np.array_equal(won[same], won[AS_IT_IS]))
+        print(f"{same!r} won exactly the planner's worlds: {agree}")
+        if not agree:
+            raise SystemExit(differs)
+
+
 def build(profile: Profile, name: str) -> Planner:
     """The planner ``SCRIPT:VARIANT`` names (:data:`SCRIPTS`), built by that script."""
     script, _, variant = name.partition(":")
