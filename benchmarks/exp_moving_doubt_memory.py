@@ -110,6 +110,7 @@ from exp_moving_memory import belonging
 from husky_course.config import Profile, get_profile, with_world
 from husky_course.planners.arrivals import Arrivals
 from husky_course.planners.base import EpisodeStart
+from husky_course.planners.ghosts import TINY  # a ghost's slot always walks, as the library's do
 from husky_course.planners.moving_discs import DiscTrackingPlanner, WalkingDiscMap
 from husky_course.planners.reference import truth_in_frame
 from husky_course.planners.registry import make_planner
@@ -121,7 +122,6 @@ DOUBTS = ("remembered", "evidence", "posterior", "promote", "aged", "in-view", "
 NOTHING = "nothing doubted"  #: the variant that must be the planner as it is (``--check``)
 WALK_SHARE = 0.01  #: ``posterior`` draws a track read as standing when its posterior walks more often
 GHOST_AGE = 4  #: ``ghosts``: steps after its disc was last made that a ghost is kept
-TINY = 1e-9  #: m per step: a ghost's slot always walks, so the draws share the standing points' clearances
 
 
 class DoubtingMap(WalkingDiscMap):
