@@ -51,6 +51,16 @@ its tracks 6; unseen, hidden 4. What its disc map held: a standing cylinder's di
 walker's tracked disc read standing 9; unseen 8 standing and 5 walkers; a first sight's disc read standing, 7
 walkers and 4 standing ones; a walker's tracked disc walking at the right speed 5, at a wrong one 3; a
 walker's disc drifted off or fallen behind 4; the rest (3 kinds) 2 or fewer each.
+With the ghosts (fingerprint ``ccc53ec5b3102cd9``, commit 8d8f781's library; the same command, about 14
+minutes on 2 cores beside another run): success 0.866; of its 67 failures, 7 on worlds the oracle finds no
+way through and 2 at a side wall. What it knew: standing, tracked 12; unseen, beyond range 10; motion read
+right 10; first sight 9; motion read wrong 7; seen, not in its tracks 6; unseen, hidden 4. What its disc map
+held: a standing cylinder's disc, tracked and right, 10; unseen 9 standing and 5 walkers; a walker's tracked
+disc read standing 7; a walker's first sight read standing 7; a walker's tracked disc walking at the right
+speed 6; a standing first sight read standing 4; a walker's disc drifted off or fallen behind 4; at a wrong
+speed 3; the rest (3 kinds) 2 or fewer each (a disc an image saw through: 1). Cylinders no image had shown
+at the fatal decision are now the largest kind (14 of 58); drawing them from the course's prior
+(``exp_moving_unseen.py``) did not show a gain.
 """
 
 from __future__ import annotations
