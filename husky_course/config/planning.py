@@ -73,6 +73,10 @@ class TrackingConfig:
     tracker's first design (four looks, a track kept two steps unseen, 0.2 m gate, 0.3 m along). For the
     disc planner, as it is (tuning worlds 1,000-1,999, full profile, 0.846; a throwaway driver setting its
     tracks' attributes): ``keep`` 3, 0.845 (won only with / only without: 2 / 3); ``gate`` 0.3, 0.843 (0 / 3).
+    An exact assignment of pieces to tracks in place of the greedy cheapest pair first
+    (:meth:`~husky_course.planners.motion.Tracks.join`; ``benchmarks/exp_moving_association.py``, the disc
+    planner with its ghosts): 9 / 6 on tuning worlds 7,000-8,999, then 3 / 6 on the test, 13,000-14,999: not
+    shown.
     """
 
     looks: int = 4
@@ -300,5 +304,11 @@ class ArrivalsConfig:
     #: without): 0.849 / 0.842 / 0.858 / 0.867 (11 / 6, 14 / 9, 12 / 9, 20 / 5; pooled 57 / 29, p = 0.003)
     ghosts: bool = True
     #: steps after its disc was last made that a ghost is kept: 4 and 8 won the same worlds on tuning worlds
-    #: 7,000-8,999 (``benchmarks/exp_moving_doubt_memory.py``, ghosts without identity), the tie taken by 4
+    #: 7,000-8,999 (``benchmarks/exp_moving_doubt_memory.py``, ghosts without identity), the tie taken by 4.
+    #: With the tracks' identity (the library's ghosts; ``exp_moving_variants.py --variants
+    #: settings:ghost_age=6 settings:ghost_age=8``), 6 and 8 won exactly the worlds 4 won on 7,000-8,999: a
+    #: ghost older than four steps is behind the robot, or its walks are closed. Drawn besides in every
+    #: draw, cylinders that no image has ruled out, from the course's own prior
+    #: (``benchmarks/exp_moving_unseen.py``): at half the course's density, 55 / 33 worlds won only with /
+    #: only without on 7,000-8,999, then 51 / 46 on the test, 17,000-18,999 (p = 0.69): not shown
     ghost_age: int = 4
