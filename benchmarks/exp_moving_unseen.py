@@ -38,8 +38,10 @@ The rule for choosing, written down before any episode ran: a variant is chosen 
 less worlds won only without, and tested on tuning worlds 17,000-18,999 (no choice has used them) only if
 it wins more worlds than it loses on 7,000-8,999; the test's pooled sign test is the result.
 
-Measured (full profile, library fingerprint of commit 8d8f781, the planner with ghosts; about 5 minutes a
-variant per 1,000 worlds on 2 cores, twice the planner's own), won only with / only without:
+Measured (full profile, library fingerprint of commit 8d8f781, the planner with ghosts; ``unseen-half`` took
+4.6 minutes per 1,000 worlds alone on 2 cores, where variants that decide as the planner does took 3.4-3.7,
+and ``unseen`` about 1.5 times ``unseen-half``'s time beside the same other run), won only with / only
+without:
 
 ===============  =====================  =====================  ==========
 variant          7,000-7,999 (0.844)    8,000-8,999 (0.870)    together
