@@ -304,7 +304,9 @@ def wire(planner, readers: dict, variant: str, speeds: np.ndarray) -> None:
 
 def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     """``TrackingPlanner._decide_over_draws`` with each read disc's speed drawn from its reader's classes
-    (a bin's speed uniform within it) in place of the tracked walkers' normal error."""
+    (a bin's speed uniform within it) in place of the tracked walkers' normal error; the map's ghosts drawn
+    as the library draws them (before 2026-12-08 none: the module docstring's figures were measured before
+    the planner had ghosts)."""
     prob, at = self.map.read
     if not len(at):  # nothing read: the planner's own draws (before 8fed14f, ``draws`` drew here too)
         return tracking.TrackingPlanner._decide_over_draws(self, horizon)
@@ -314,6 +316,9 @@ def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
     read[at] = True
     tracked = self.tracked & ~read
     rng, h = np.random.default_rng((self._key, self._remaining)), self.map.arrivals.hypotheses
+    later = np.random.default_rng((self._key, self._remaining, 7))  # the library's ghosts, as it draws them
+    ghosts = self.map.dropped
+    ghost_weights = ghosts.weights() if ghosts is not None else []
     tally, base, k = tracking.Tally(self.ties, keys), self.velocity, int(tracked.sum())
     drawn_ones = (group >= 0) & self.doubtful if len(weights) else None
     half = (speeds[2] - speeds[1]) / 2
@@ -327,7 +332,14 @@ def drawn(self, horizon: int, speeds: np.ndarray) -> tuple[int, np.ndarray]:
         if len(at):
             c = np.array([rng.choice(17, p=p / p.sum()) for p in prob])
             v[at] = speeds[c] + np.where(c > 0, rng.uniform(-half, half, len(c)), 0.0)
-        tally.add(self._keys_if(horizon, v), self._drawn)
+        if ghost_weights:  # each ghost at an open walk, its slot after the map's points (DiscTrackingPlanner)
+            ghosts.draw = [int(later.choice(len(h), p=w)) for w in ghost_weights]
+            v = np.r_[v, ghosts.slots()[1]]
+        try:
+            tally.add(self._keys_if(horizon, v), self._drawn)
+        finally:
+            if ghosts is not None:
+                ghosts.draw = None
     return tally.ranked()
 
 
