@@ -306,9 +306,9 @@ class ArrivalsConfig:
     #: steps after its disc was last made that a ghost is kept: 4 and 8 won the same worlds on tuning worlds
     #: 7,000-8,999 (``benchmarks/exp_moving_doubt_memory.py``, ghosts without identity), the tie taken by 4.
     #: With the tracks' identity (the library's ghosts; ``exp_moving_variants.py --variants
-    #: settings:ghost_age=6 settings:ghost_age=8``), 6 and 8 won exactly the worlds 4 won on 7,000-8,999: a
-    #: ghost older than four steps is behind the robot, or its walks are closed. Drawn besides in every
-    #: draw, cylinders that no image has ruled out, from the course's own prior
+    #: settings:ghost_age=6 settings:ghost_age=8``), 6 and 8 won exactly the worlds 4 won on 7,000-8,999 (our
+    #: reading, not measured: a ghost older than four steps is behind the robot, or has no walk left open).
+    #: Drawn besides in every draw, cylinders that no image has ruled out, from the course's own prior
     #: (``benchmarks/exp_moving_unseen.py``): at half the course's density, 55 / 33 worlds won only with /
     #: only without on 7,000-8,999, then 51 / 46 on the test, 17,000-18,999 (p = 0.69): not shown
     ghost_age: int = 4
